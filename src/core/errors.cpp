@@ -1,0 +1,39 @@
+#include "core/errors.hpp"
+
+#include <charconv>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+namespace crackle {
+
+int exit_code_for(const std::exception& error) {
+  if (dynamic_cast<const InputError*>(&error)) return 2;
+  if (dynamic_cast<const SolverError*>(&error)) return 3;
+  if (dynamic_cast<const IoError*>(&error)) return 4;
+  return 1;
+}
+
+std::string format_number(double value) {
+  // Round to 15 significant digits (hides binary noise of computed values), then print the
+  // shortest text that reads back as that number.
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%.15g", value);
+  const double rounded = std::strtod(buffer, nullptr);
+  auto result = std::to_chars(buffer, buffer + sizeof buffer, rounded);
+  *result.ptr = '\0';
+  std::string text(buffer);
+  // "2e+11" -> "2e11", "1e-05" -> "1e-5": the way people write it in YAML.
+  auto e = text.find('e');
+  if (e != std::string::npos) {
+    std::string mantissa = text.substr(0, e);
+    std::string exponent = text.substr(e + 1);
+    bool negative = exponent[0] == '-';
+    if (exponent[0] == '+' || exponent[0] == '-') exponent.erase(0, 1);
+    while (exponent.size() > 1 && exponent[0] == '0') exponent.erase(0, 1);
+    text = mantissa + "e" + (negative ? "-" : "") + exponent;
+  }
+  return text;
+}
+
+}  // namespace crackle

@@ -1,0 +1,27 @@
+#pragma once
+/// \file Wall-clock timer and memory figures for reports and benchmarks.
+#include <chrono>
+
+namespace crackle {
+
+/// Wall-clock stopwatch started at construction.
+class Stopwatch {
+ public:
+  Stopwatch() : start_(std::chrono::steady_clock::now()) {}
+  /// Seconds since construction or the last restart().
+  double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+  void restart() { start_ = std::chrono::steady_clock::now(); }
+
+ private:
+  std::chrono::steady_clock::time_point start_;
+};
+
+/// Peak resident set size of this process so far, in bytes (0 where unknown).
+long long peak_rss_bytes();
+
+/// Current resident set size of this process, in bytes (0 where unknown).
+long long current_rss_bytes();
+
+}  // namespace crackle

@@ -1,0 +1,26 @@
+#pragma once
+/// \file CSV tables with units in the header ("time [s]"), written atomically.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace crackle::io {
+
+/// A column-oriented table; every column has a name with its unit, e.g. "frequency [Hz]".
+struct CsvTable {
+  std::vector<std::string> headers;
+  std::vector<std::vector<double>> columns;  ///< columns[c][row]
+  /// Adds a column; all columns must have the same length when written.
+  void add(std::string header, std::vector<double> values) {
+    headers.push_back(std::move(header));
+    columns.push_back(std::move(values));
+  }
+};
+
+/// Text of the table (full double precision, comma-separated, '\n' line ends).
+std::string to_csv(const CsvTable& table);
+
+/// Writes the table atomically; IoError on failure or on columns of unequal length.
+void write_csv(const std::filesystem::path& path, const CsvTable& table);
+
+}  // namespace crackle::io

@@ -1,0 +1,266 @@
+#include "mesh/box.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "core/errors.hpp"
+#include "core/quadrature.hpp"
+
+namespace crackle::mesh {
+namespace {
+
+/// Positions closer than this fraction of the box size are the same grid line.
+constexpr double kRelativeTolerance = 1e-9;
+
+double tolerance(const BoxSpec& box, int axis) { return kRelativeTolerance * box.size[axis]; }
+
+/// The two in-plane axes of a crack with the given normal, in increasing order.
+std::array<int, 2> in_plane_axes(int normal) {
+  return {normal == kX ? kY : kX, normal == kZ ? kY : kZ};
+}
+
+std::vector<double> uniform_lines(const BoxSpec& box, int axis) {
+  std::vector<double> lines(box.cells[axis] + 1);
+  for (int k = 0; k <= box.cells[axis]; ++k) {
+    lines[k] = box.origin[axis] + box.size[axis] * k / box.cells[axis];
+  }
+  return lines;
+}
+
+/// Index of the line at `position`, or -1.
+int find_line(const std::vector<double>& lines, double position, double tol) {
+  for (std::size_t k = 0; k < lines.size(); ++k) {
+    if (std::abs(lines[k] - position) <= tol) return static_cast<int>(k);
+  }
+  return -1;
+}
+
+std::string range_text(double low, double high) {
+  return "[" + format_number(low) + ", " + format_number(high) + "]";
+}
+
+}  // namespace
+
+const std::array<std::string, 6>& box_face_names() {
+  static const std::array<std::string, 6> names = {"x-", "x+", "y-", "y+", "z-", "z+"};
+  return names;
+}
+
+std::string check_crack(const BoxSpec& box, const CrackSpec& crack) {
+  const int normal = crack.normal;
+  const double low = box.origin[normal];
+  const double high = low + box.size[normal];
+  const std::string axis = axis_name(normal);
+  if (!(crack.at > low + tolerance(box, normal) && crack.at < high - tolerance(box, normal))) {
+    return "plane.at: expected a position strictly inside the body, " + axis + " in (" +
+           format_number(low) + ", " + format_number(high) + "), got " + format_number(crack.at);
+  }
+  const std::vector<double> lines = uniform_lines(box, normal);
+  if (find_line(lines, crack.at, tolerance(box, normal)) < 0) {
+    const double spacing = box.size[normal] / box.cells[normal];
+    const int below = static_cast<int>(std::floor((crack.at - low) / spacing));
+    return "plane.at: expected a grid plane of the mesh, " + axis + " = " + format_number(low) +
+           " + k*" + format_number(spacing) + " (nearest " + format_number(lines[below]) + " or " +
+           format_number(lines[std::min<int>(below + 1, box.cells[normal])]) + "), got " +
+           format_number(crack.at);
+  }
+  for (int t : in_plane_axes(normal)) {
+    const auto& range = crack.region[t];
+    const double body_low = box.origin[t], body_high = box.origin[t] + box.size[t];
+    const std::string key = std::string("region.") + axis_name(t);
+    if (!(range[1] - range[0] > tolerance(box, t))) {
+      return key + ": expected [low, high] with low < high (a crack of nonzero area), got " +
+             range_text(range[0], range[1]);
+    }
+    if (range[0] < body_low - tolerance(box, t) || range[1] > body_high + tolerance(box, t)) {
+      return key + ": expected a range inside the body, " + axis_name(t) + " in " +
+             range_text(body_low, body_high) + ", got " + range_text(range[0], range[1]);
+    }
+  }
+  return "";
+}
+
+std::array<std::vector<double>, 3> grid_lines(const BoxSpec& box, const std::optional<CrackSpec>& crack) {
+  std::array<std::vector<double>, 3> lines;
+  for (int axis = 0; axis < 3; ++axis) lines[axis] = uniform_lines(box, axis);
+  if (!crack) return lines;
+  for (int t : in_plane_axes(crack->normal)) {
+    for (double edge : crack->region[t]) {
+      if (find_line(lines[t], edge, tolerance(box, t)) >= 0) continue;
+      if (edge <= box.origin[t] || edge >= box.origin[t] + box.size[t]) continue;
+      lines[t].insert(std::upper_bound(lines[t].begin(), lines[t].end(), edge), edge);
+    }
+  }
+  return lines;
+}
+
+Mesh build_box_mesh(const BoxSpec& box, const std::optional<CrackSpec>& crack) {
+  return build_box_mesh(box, grid_lines(box, crack), crack);
+}
+
+Mesh build_box_mesh(const BoxSpec& box, const std::array<std::vector<double>, 3>& lines,
+                    const std::optional<CrackSpec>& crack) {
+  if (box.order < 1 || box.order > 4) {
+    throw InputError("mesh.box.order: expected an integer in 1..4, got " + std::to_string(box.order));
+  }
+  if (crack) {
+    std::string problem = check_crack(box, *crack);
+    if (!problem.empty()) throw InputError("crack." + problem);
+  }
+  const int p = box.order;
+  const Rule1D gll = gauss_lobatto(p + 1);
+
+  // Node lattice along each axis: the GLL points of every cell, shared at cell boundaries.
+  std::array<std::vector<double>, 3> lattice;
+  std::array<int, 3> n_cells{};
+  for (int axis = 0; axis < 3; ++axis) {
+    n_cells[axis] = static_cast<int>(lines[axis].size()) - 1;
+    if (n_cells[axis] < 1) throw InputError("mesh: a body left with no elements");
+    for (int c = 0; c < n_cells[axis]; ++c) {
+      const double a = lines[axis][c], b = lines[axis][c + 1];
+      for (int i = 0; i < p; ++i) lattice[axis].push_back(a + 0.5 * (gll.points[i] + 1.0) * (b - a));
+    }
+    lattice[axis].push_back(lines[axis].back());
+  }
+  const Index nx = static_cast<Index>(lattice[0].size()), ny = static_cast<Index>(lattice[1].size()),
+              nz = static_cast<Index>(lattice[2].size());
+  auto lattice_node = [&](Index i, Index j, Index k) { return i + nx * (j + ny * k); };
+
+  Mesh mesh;
+  mesh.order = p;
+  mesh.axis_aligned_bricks = true;
+  mesh.nodes.resize(static_cast<std::size_t>(nx) * ny * nz);
+  for (Index k = 0; k < nz; ++k)
+    for (Index j = 0; j < ny; ++j)
+      for (Index i = 0; i < nx; ++i) mesh.nodes[lattice_node(i, j, k)] = Vec3(lattice[0][i], lattice[1][j], lattice[2][k]);
+  mesh.n_original_nodes = mesh.n_nodes();
+
+  const int n = p + 1;
+  const Index n_elements = static_cast<Index>(n_cells[0]) * n_cells[1] * n_cells[2];
+  mesh.connectivity.resize(static_cast<std::size_t>(n_elements) * n * n * n);
+  mesh.element_region.assign(n_elements, 0);
+  std::vector<std::array<int, 3>> element_cell(n_elements);
+  for (int cz = 0; cz < n_cells[2]; ++cz)
+    for (int cy = 0; cy < n_cells[1]; ++cy)
+      for (int cx = 0; cx < n_cells[0]; ++cx) {
+        const Index e = cx + n_cells[0] * (cy + n_cells[1] * cz);
+        element_cell[e] = {cx, cy, cz};
+        Index* element = mesh.connectivity.data() + static_cast<std::size_t>(e) * n * n * n;
+        for (int c = 0; c < n; ++c)
+          for (int b = 0; b < n; ++b)
+            for (int a = 0; a < n; ++a) element[a + n * (b + n * c)] = lattice_node(p * cx + a, p * cy + b, p * cz + c);
+      }
+
+  // Named sets of the six faces.
+  const std::array<Index, 3> extent{nx, ny, nz};
+  for (int face = 0; face < 6; ++face) {
+    const int axis = face / 2;
+    const Index fixed = (face % 2 == 0) ? 0 : extent[axis] - 1;
+    std::vector<Index>& nodes = mesh.node_sets[box_face_names()[face]];
+    const int u = axis == 0 ? 1 : 0, v = axis == 2 ? 1 : 2;
+    for (Index t2 = 0; t2 < extent[v]; ++t2)
+      for (Index t1 = 0; t1 < extent[u]; ++t1) {
+        Index ijk[3];
+        ijk[axis] = fixed;
+        ijk[u] = t1;
+        ijk[v] = t2;
+        nodes.push_back(lattice_node(ijk[0], ijk[1], ijk[2]));
+      }
+    std::vector<FaceRef>& faces = mesh.face_sets[box_face_names()[face]];
+    const int cell = (face % 2 == 0) ? 0 : n_cells[axis] - 1;
+    for (Index e = 0; e < n_elements; ++e) {
+      if (element_cell[e][axis] == cell) faces.push_back({e, face});
+    }
+  }
+
+  if (!crack) return mesh;
+
+  // ---- The crack: duplicate the nodes of the crack faces, except on the crack front.
+  // Front rule: a node on an edge of the crack rectangle stays shared unless that edge lies on the
+  // body's surface (an edge crack opens at the surface; its front is only the edge inside the body).
+  const int normal = crack->normal;
+  const auto [t1, t2] = in_plane_axes(normal);
+  const int plane_cell = find_line(lines[normal], crack->at, tolerance(box, normal));
+  const Index plane_index = static_cast<Index>(p) * plane_cell;
+  std::array<std::array<int, 2>, 3> region_cells{};  // first and one-past-last cell of the region
+  for (int t : {t1, t2}) {
+    const double low = std::max(crack->region[t][0], box.origin[t]);
+    const double high = std::min(crack->region[t][1], box.origin[t] + box.size[t]);
+    region_cells[t] = {find_line(lines[t], low, tolerance(box, t)), find_line(lines[t], high, tolerance(box, t))};
+    if (region_cells[t][0] < 0 || region_cells[t][1] < 0) {
+      throw InputError(std::string("crack.region.") + axis_name(t) + ": expected edges on grid lines, got " +
+                       range_text(crack->region[t][0], crack->region[t][1]));
+    }
+  }
+  auto on_surface = [&](int t, int line) { return line == 0 || line == n_cells[t]; };
+
+  // Lattice ranges of the crack-face nodes along the in-plane axes.
+  const Index i_begin = static_cast<Index>(p) * region_cells[t1][0], i_end = static_cast<Index>(p) * region_cells[t1][1];
+  const Index j_begin = static_cast<Index>(p) * region_cells[t2][0], j_end = static_cast<Index>(p) * region_cells[t2][1];
+  auto plane_node = [&](Index i1, Index i2) {
+    Index ijk[3];
+    ijk[normal] = plane_index;
+    ijk[t1] = i1;
+    ijk[t2] = i2;
+    return lattice_node(ijk[0], ijk[1], ijk[2]);
+  };
+  auto is_front = [&](Index i1, Index i2) {
+    return (i1 == i_begin && !on_surface(t1, region_cells[t1][0])) ||
+           (i1 == i_end && !on_surface(t1, region_cells[t1][1])) ||
+           (i2 == j_begin && !on_surface(t2, region_cells[t2][0])) ||
+           (i2 == j_end && !on_surface(t2, region_cells[t2][1]));
+  };
+
+  // Tributary areas by GLL nodal quadrature over the crack faces (MODEL.md eq. 25d).
+  const Index width = i_end - i_begin + 1;
+  std::vector<double> area(static_cast<std::size_t>(width) * (j_end - j_begin + 1), 0.0);
+  for (int c2 = region_cells[t2][0]; c2 < region_cells[t2][1]; ++c2)
+    for (int c1 = region_cells[t1][0]; c1 < region_cells[t1][1]; ++c1) {
+      const double half1 = 0.5 * (lines[t1][c1 + 1] - lines[t1][c1]);
+      const double half2 = 0.5 * (lines[t2][c2 + 1] - lines[t2][c2]);
+      for (int b = 0; b <= p; ++b)
+        for (int a = 0; a <= p; ++a) {
+          const Index i1 = static_cast<Index>(p) * c1 + a - i_begin, i2 = static_cast<Index>(p) * c2 + b - j_begin;
+          area[i1 + width * i2] += gll.weights[a] * gll.weights[b] * half1 * half2;
+        }
+    }
+
+  std::vector<Index> duplicate(mesh.nodes.size(), -1);
+  Vec3 unit_normal = Vec3::Zero();
+  unit_normal[normal] = 1.0;  // n+ points from the plus face (lower side) into the crack
+  for (Index i2 = j_begin; i2 <= j_end; ++i2)
+    for (Index i1 = i_begin; i1 <= i_end; ++i1) {
+      const Index original = plane_node(i1, i2);
+      CrackPair pair;
+      pair.plus = original;
+      pair.minus = original;
+      pair.normal = unit_normal;
+      pair.area = area[(i1 - i_begin) + width * (i2 - j_begin)];
+      if (!is_front(i1, i2)) {
+        pair.minus = mesh.n_nodes();
+        duplicate[original] = pair.minus;
+        mesh.nodes.push_back(mesh.nodes[original]);
+      }
+      mesh.crack_pairs.push_back(pair);
+    }
+  // Elements above the plane refer to the duplicates (the minus face).
+  for (Index e = 0; e < n_elements; ++e) {
+    if (element_cell[e][normal] != plane_cell) continue;
+    Index* element = mesh.connectivity.data() + static_cast<std::size_t>(e) * n * n * n;
+    for (int a = 0; a < n * n * n; ++a) {
+      if (duplicate[element[a]] >= 0) element[a] = duplicate[element[a]];
+    }
+  }
+  // Face node sets hold both copies of a split node.
+  for (auto& [name, nodes] : mesh.node_sets) {
+    const std::size_t count = nodes.size();
+    for (std::size_t k = 0; k < count; ++k) {
+      if (duplicate[nodes[k]] >= 0) nodes.push_back(duplicate[nodes[k]]);
+    }
+  }
+  mesh.crack_area = (crack->region[t1][1] - crack->region[t1][0]) * (crack->region[t2][1] - crack->region[t2][0]);
+  return mesh;
+}
+
+}  // namespace crackle::mesh
