@@ -45,11 +45,25 @@ struct Scene {
   bool has_modal_section = false;
 };
 
+struct Param;
+
+/// A parameter-study override: a YAML value for a dotted key path such as `crack.region.z`,
+/// `modal.modes` or `boundary[0].value` (list entries by index). Applied before validation, so an
+/// overridden value is checked like any other; messages about it name the path but no line.
+struct Override {
+  std::string path;
+  std::string value;  ///< YAML text: "0.004", "[0.007, 0.01]", "lumped"
+};
+
 /// Loads and validates a scene file. Throws InputError (one line, see above) on any problem.
-Scene load_scene(const std::string& path);
+Scene load_scene(const std::string& path, const std::vector<Override>& overrides = {});
 
 /// Same, from YAML text; `name` stands for the file name in messages.
-Scene parse_scene(const std::string& text, const std::string& name);
+Scene parse_scene(const std::string& text, const std::string& name, const std::vector<Override>& overrides = {});
+
+/// The parameter table of a scene file: every key, declared once (schema.hpp). A new section is
+/// one more entry here plus its conversion in scene.cpp.
+const Param& scene_parameters();
 
 /// Markdown reference of every scene key, generated from the parameter table.
 std::string scene_format_markdown();
