@@ -1,0 +1,61 @@
+#include <iomanip>
+#include <ostream>
+
+#include "commands.hpp"
+#include "core/resources.hpp"
+#include "fem/assembly.hpp"
+#include "fem/constraints.hpp"
+#include "model.hpp"
+#include "scene/scene.hpp"
+
+namespace crackle::app {
+
+void run_check(const CheckOptions& options, std::ostream& out) {
+  Stopwatch clock;
+  const scene::Scene scene = scene::load_scene(options.scene_path);
+  Model model = build_model(scene);
+  const double mesh_seconds = clock.seconds();
+  const mesh::Mesh& mesh = model.mesh;
+
+  const mesh::DofMap open = mesh::make_dof_map(mesh, mesh::Variant::open);
+  const mesh::DofMap tied = mesh::make_dof_map(mesh, mesh::Variant::uncracked);
+  const fem::Constraints constraints = fem::make_constraints(open, model.dirichlet);
+  Index front = 0;
+  for (const mesh::CrackPair& pair : mesh.crack_pairs) front += pair.on_front();
+
+  out << "scene        " << scene.file << "\n";
+  out << "mesh         box " << scene.box.cells[0] << " x " << scene.box.cells[1] << " x " << scene.box.cells[2]
+      << " cells requested, order p = " << mesh.order << "\n";
+  out << "elements     " << mesh.n_elements() << "\n";
+  out << "nodes        " << mesh.n_nodes() << " (" << mesh.n_original_nodes << " + "
+      << mesh.n_nodes() - mesh.n_original_nodes << " crack-face copies)\n";
+  out << "dofs         " << open.n_dofs() << " open, " << tied.n_dofs() << " uncracked, "
+      << open.n_dofs() - constraints.n_free() << " constrained (open)\n";
+  if (mesh.has_crack()) {
+    double pair_area = 0.0;
+    for (const mesh::CrackPair& pair : mesh.crack_pairs) pair_area += pair.area;
+    out << "crack pairs  " << mesh.crack_pairs.size() << " (" << mesh.crack_pairs.size() - front << " split, "
+        << front << " on the front)\n";
+    out << "crack area   " << std::setprecision(6) << mesh.crack_area << " m^2 (pairs sum to " << pair_area
+        << " m^2)\n";
+  } else {
+    out << "crack pairs  0 (no crack)\n";
+  }
+  out << "volume       " << std::setprecision(6) << mesh.volume() << " m^3\n";
+  out << "mesh time    " << std::setprecision(3) << mesh_seconds << " s\n";
+  if (!options.assemble) return;
+
+  clock.restart();
+  const SparseMatrix stiffness = fem::assemble_stiffness(mesh, open, model.materials);
+  const double stiffness_seconds = clock.seconds();
+  clock.restart();
+  const VectorX lumped = fem::assemble_lumped_mass(mesh, open, model.materials);
+  const double mass_seconds = clock.seconds();
+  out << "total mass   " << std::setprecision(6) << lumped.sum() / 3.0 << " kg\n";
+  out << "K            " << stiffness.nonZeros() << " nonzeros, assembled in " << std::setprecision(3)
+      << stiffness_seconds << " s\n";
+  out << "lumped M     assembled in " << std::setprecision(3) << mass_seconds << " s\n";
+  out << "peak memory  " << peak_rss_bytes() / (1024 * 1024) << " MiB\n";
+}
+
+}  // namespace crackle::app
