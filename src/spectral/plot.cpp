@@ -1,0 +1,186 @@
+#include "spectral/plot.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "core/errors.hpp"
+
+namespace crackle::spectral {
+namespace fs = std::filesystem;
+namespace {
+
+std::string shell_quote(const std::string& text) {
+  std::string quoted = "'";
+  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
+/// A gnuplot single-quoted string (no escapes inside except '' for ').
+std::string gnuplot_quote(const std::string& text) {
+  std::string quoted = "'";
+  for (char c : text) quoted += c == '\'' ? std::string("''") : std::string(1, c);
+  return quoted + "'";
+}
+
+std::string number_text(double value) {
+  char buffer[64];
+  auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, result.ptr);
+}
+
+std::string order_label(double order) {
+  const long twice = std::lround(2.0 * order);
+  return twice % 2 == 0 ? std::to_string(twice / 2) : std::to_string(twice) + "/2";
+}
+
+/// Full path of the executable, or empty.
+fs::path find_executable(const std::string& name) {
+  if (name.empty()) return {};
+  const auto runnable = [](const fs::path& path) {
+    std::error_code error;
+    return fs::is_regular_file(path, error) && ::access(path.c_str(), X_OK) == 0;
+  };
+  if (name.find('/') != std::string::npos) return runnable(name) ? fs::path(name) : fs::path();
+  const char* path_variable = std::getenv("PATH");
+  if (!path_variable) return {};
+  std::stringstream entries(path_variable);
+  std::string directory;
+  while (std::getline(entries, directory, ':')) {
+    if (directory.empty()) continue;
+    const fs::path candidate = fs::path(directory) / name;
+    if (runnable(candidate)) return candidate;
+  }
+  return {};
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << text;
+  out.close();
+  if (!out) throw IoError("cannot write " + path.string());
+}
+
+std::string terminal_lines() {
+  return "if (strstrt(GPVAL_TERMINALS, 'pngcairo') > 0) {\n"
+         "  set terminal pngcairo size 1000,600 noenhanced\n"
+         "} else {\n"
+         "  set terminal png size 1000,600 noenhanced\n"
+         "}\n";
+}
+
+/// Writes data and script, runs gnuplot in the PNG's folder, checks the PNG.
+PlotResult draw(const fs::path& png, const std::string& data, const std::string& script_body,
+                const PlotOptions& options) {
+  PlotResult result;
+  result.png = png;
+  result.data = fs::path(png).replace_extension(".dat");
+  result.script = fs::path(png).replace_extension(".gp");
+  try {
+    const fs::path folder = png.has_parent_path() ? png.parent_path() : fs::path(".");
+    std::string script = "# gnuplot script written by crackle; run: gnuplot " +
+                         result.script.filename().string() + "\n" + terminal_lines() +
+                         "set output " + gnuplot_quote(png.filename().string()) + "\n" +
+                         "set title " + gnuplot_quote(options.title) + "\nset grid\n" + script_body;
+    write_text(result.data, data);
+    write_text(result.script, script);
+    const fs::path gnuplot = find_executable(options.gnuplot);
+    if (gnuplot.empty()) {
+      result.note = "gnuplot ('" + options.gnuplot + "') not found: " + png.filename().string() +
+                    " not drawn; data and script written";
+      return result;
+    }
+    std::error_code ignored;
+    fs::remove(png, ignored);
+    const std::string command = "cd " + shell_quote(folder.string()) + " && " +
+                                shell_quote(gnuplot.string()) + " " +
+                                shell_quote(result.script.filename().string()) + " 2>&1";
+    FILE* pipe = ::popen(command.c_str(), "r");
+    if (!pipe) {
+      result.note = "could not start gnuplot";
+      return result;
+    }
+    char buffer[512];
+    std::string output;
+    while (std::fgets(buffer, sizeof buffer, pipe)) {
+      if (output.size() < 4000) output += buffer;
+    }
+    const int status = ::pclose(pipe);
+    std::error_code error;
+    const bool made = fs::is_regular_file(png, error) && fs::file_size(png, error) > 0;
+    result.written = status == 0 && made;
+    result.note = result.written ? output
+                                 : "gnuplot failed (status " + std::to_string(status) + "): " + output;
+  } catch (const std::exception& error) {
+    result.written = false;
+    result.note = error.what();
+  }
+  return result;
+}
+
+}  // namespace
+
+bool gnuplot_available(const PlotOptions& options) {
+  return !find_executable(options.gnuplot).empty();
+}
+
+PlotResult plot_time_history(const fs::path& png, const std::vector<double>& values,
+                             const Sampling& sampling, const PlotOptions& options) {
+  std::string data = "# time [s]  " + options.quantity + " [" + options.unit + "]\n";
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    data += number_text(sampling.start_time + static_cast<double>(i) * sampling.time_step);
+    data += ' ';
+    data += number_text(values[i]);
+    data += '\n';
+  }
+  const std::string body =
+      "set autoscale xfix\nset xlabel 'time [s]'\nset ylabel " +
+      gnuplot_quote(options.quantity + " [" + options.unit + "]") + "\n" + "plot " +
+      gnuplot_quote(fs::path(png).replace_extension(".dat").filename().string()) +
+      " using 1:2 with lines linewidth 1 notitle\n";
+  return draw(png, data, body, options);
+}
+
+PlotResult plot_spectrum(const fs::path& png, const AmplitudeSpectrum& spectrum,
+                         double excitation_frequency_hz, const std::vector<double>& orders,
+                         const PlotOptions& options) {
+  std::string data = "# frequency [Hz]  amplitude [" + options.unit + "]\n";
+  double largest = 0.0;
+  for (std::size_t k = 0; k < spectrum.frequency_hz.size(); ++k) {
+    data += number_text(spectrum.frequency_hz[k]);
+    data += ' ';
+    data += number_text(spectrum.amplitude[k]);
+    data += '\n';
+    if (std::isfinite(spectrum.amplitude[k])) largest = std::max(largest, spectrum.amplitude[k]);
+  }
+  const double floor = largest > 0.0 ? 1e-14 * largest : 1e-300;
+  std::string body = "set logscale y\nset xlabel 'frequency [Hz]'\nset ylabel " +
+                     gnuplot_quote("amplitude [" + options.unit + "]") + "\n";
+  double highest = 0.0;
+  if (excitation_frequency_hz > 0.0) {
+    for (double order : orders) {
+      if (order <= 0.0) continue;
+      highest = std::max(highest, order);
+      const std::string x = number_text(order * excitation_frequency_hz);
+      body += "set arrow from " + x + ", graph 0 to " + x +
+              ", graph 1 nohead dashtype 2 linecolor rgb 'gray50'\n";
+      body += "set label " + gnuplot_quote(order_label(order)) + " at " + x +
+              ", graph 0.96 center front\n";
+    }
+    if (highest > 0.0) {
+      body += "set xrange [0:" + number_text((highest + 0.5) * excitation_frequency_hz) + "]\n";
+    }
+  }
+  body += "plot " + gnuplot_quote(fs::path(png).replace_extension(".dat").filename().string()) +
+          " using 1:($2 > " + number_text(floor) + " ? $2 : " + number_text(floor) +
+          ") with lines linewidth 1.5 notitle\n";
+  return draw(png, data, body, options);
+}
+
+}  // namespace crackle::spectral

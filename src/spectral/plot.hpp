@@ -1,0 +1,46 @@
+#pragma once
+/// \file PNG plots of time histories and amplitude spectra, drawn by gnuplot.
+/// Each plot writes three files side by side: `<name>.dat` (the data, with units in a
+/// comment line), `<name>.gp` (a gnuplot script that reads the data by file name, so the
+/// folder can be moved and re-plotted) and `<name>.png`. Plotting never throws: a missing
+/// gnuplot or a failure gives `written == false` and a note, and the run goes on.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "spectral/harmonics.hpp"
+#include "spectral/spectrum.hpp"
+
+namespace crackle::spectral {
+
+/// Labels and the gnuplot to use.
+struct PlotOptions {
+  std::string title;                    ///< plot title (may be empty)
+  std::string quantity = "displacement";  ///< what the signal is, for the y label
+  std::string unit = "m";               ///< unit of the signal
+  std::string gnuplot = "gnuplot";      ///< executable: a name looked up in PATH, or a path
+};
+
+/// Outcome of a plot.
+struct PlotResult {
+  bool written = false;  ///< the PNG exists and is not empty
+  std::string note;      ///< why not, or gnuplot's messages
+  std::filesystem::path data, script, png;
+};
+
+/// Whether the gnuplot of the options can be found (PATH lookup for a bare name).
+bool gnuplot_available(const PlotOptions& options);
+
+/// (a) Time history x(t_i), t_i = start_time + i dt, as lines: time [s] vs quantity [unit].
+PlotResult plot_time_history(const std::filesystem::path& png, const std::vector<double>& values,
+                             const Sampling& sampling, const PlotOptions& options);
+
+/// (b) Amplitude spectrum on a log y-scale, with dashed vertical lines labelled "1/2", "1",
+/// "2", ... at the given orders of the excitation frequency f (orders 0 are not marked). The
+/// x-range ends half an order above the highest order when f > 0. Values below 1e-14 of the
+/// largest amplitude are drawn at that floor (the data file keeps them as they are).
+PlotResult plot_spectrum(const std::filesystem::path& png, const AmplitudeSpectrum& spectrum,
+                         double excitation_frequency_hz, const std::vector<double>& orders,
+                         const PlotOptions& options);
+
+}  // namespace crackle::spectral
