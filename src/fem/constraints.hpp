@@ -37,4 +37,9 @@ SparseMatrix restrict_to_free(const SparseMatrix& matrix, const Constraints& con
 VectorX restrict_to_free(const VectorX& full, const Constraints& constraints);
 VectorX expand_from_free(const VectorX& free, const Constraints& constraints, bool with_prescribed_values);
 
+/// Right-hand side over the free DOFs of A u = f with the prescribed values moved over:
+/// \f$f_f - A_{fc} \bar u_c\f$.
+VectorX free_right_hand_side(const SparseMatrix& matrix, const VectorX& full_rhs,
+                             const Constraints& constraints);
+
 }  // namespace crackle::fem

@@ -33,7 +33,9 @@ void element_stiffness(const HexBasis& basis, const double* coords, const Materi
 /// Consistent element mass per component (n x n, scalar) of eq. (25c), without density.
 void element_mass_scalar(const HexBasis& basis, const double* coords, MatrixX& mass);
 
-/// Lumped element mass per node (n, scalar) by GLL nodal quadrature, without density.
+/// Lumped element mass per node (n, scalar) by GLL nodal quadrature, without density: diagonal of
+/// eq. (25c), positive. Scaled to sum to the element volume, which changes it only on non-affine
+/// elements (where the GLL rule does not integrate det J exactly).
 void element_lumped_mass_scalar(const HexBasis& basis, const double* coords, double* mass);
 
 /// Integrals of the shape functions \f$\int_{\Omega_e} N_a\, d\Omega\f$ (n values) with the
