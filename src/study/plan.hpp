@@ -1,0 +1,90 @@
+#pragma once
+/// \file The plan of a parameter study: the `study:` section of a scene file (which keys vary and
+/// how), and the cases it expands to, each a full scene validated by the scene loader.
+///
+/// ```yaml
+/// study:
+///   vary:
+///     crack.region.z: {from: [0.009, 0.01], to: [0.005, 0.01], steps: 5}  # a range
+///     modal.mass: [consistent, lumped]                                      # a list of values
+///   mode: grid                  # grid (cartesian product, first key slowest) | zip
+///   outputs: [modal, spectrum]  # what each case runs: modal -> `crackle modal`, spectrum -> `crackle run`
+/// ```
+/// The scene loader does not know `study:`; the section is parsed here, with the same
+/// `file:line: key.path: expected ..., got ...` messages, and blanked out of the text (lines kept)
+/// before the rest goes to scene::parse_scene.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "scene/scene.hpp"
+
+namespace crackle::study {
+
+enum class StudyMode { grid, zip };
+
+/// One varied scene key and its values.
+struct VariedKey {
+  std::string path;                 ///< scene key path: crack.region.z, boundary[0].value
+  std::vector<std::string> values;  ///< YAML text of each value, in order
+  int line = -1;                    ///< line of the key in the scene file
+};
+
+/// The `study:` section.
+struct StudySpec {
+  std::vector<VariedKey> vary;
+  StudyMode mode = StudyMode::grid;
+  std::vector<std::string> outputs = {"modal"};  ///< subset of "modal", "spectrum", in this order
+  int line = -1;                                 ///< line of `study:`; -1 when absent
+};
+
+/// One case: the base scene with overrides applied.
+struct StudyCase {
+  int index = 0;
+  std::vector<scene::Override> overrides;  ///< the varied keys, then any the study adds (mesh lines)
+  std::string scene_text;                  ///< the full case scene as written to cases/NNNN/scene.yaml
+  std::string hash;                        ///< of the scene (without its comment header) and the outputs
+  std::string modal_key;    ///< hash of what the uncracked modal solve depends on: the modal cache key
+  std::string primer_text;  ///< scene that solves just the uncracked modes of this key (may be empty)
+};
+
+struct StudyPlan {
+  std::string file;  ///< scene file name, for messages
+  StudySpec spec;
+  std::string base_text;  ///< the scene text without the study section (line numbers kept)
+  std::vector<StudyCase> cases;
+  bool shares_grid_lines = false;  ///< the study added the union of crack edges as mesh.box.lines
+};
+
+/// Parses and checks the `study:` section of a scene file. InputError (file:line: path: ...) on any
+/// problem, including a varied key the scene format does not declare; a missing section gives a
+/// spec with no varied keys and line -1.
+StudySpec parse_study_section(const std::string& text, const std::string& file);
+
+/// The scene text without its top-level `study:` section. Block-style sections are blanked line by
+/// line, so that messages about the rest keep their line numbers.
+std::string strip_study_section(const std::string& text, const std::string& file);
+
+/// Empty when `path` names a key of the scene format (scene::scene_parameters()), else why not,
+/// as "expected ..., got ..." text.
+std::string check_key_path(const std::string& path);
+
+/// Every scalar key path of the scene format, list entries as `[0]`: mesh.box.size, boundary[0].face.
+std::vector<std::string> leaf_key_paths();
+
+/// Expands the study into cases and validates every case scene. Throws InputError, before
+/// anything runs, for a bad base scene, a bad study section, or a case whose overrides the scene
+/// loader rejects (the message names the case, its values and the offending key path).
+StudyPlan plan_study(const std::string& text, const std::string& file);
+
+/// Sorted, distinct grid-line coordinates per axis that make every case's crack edges grid lines
+/// of one shared mesh; empty per axis where the cases' cracks agree.
+std::vector<std::vector<double>> shared_crack_lines(const std::vector<scene::Scene>& scenes);
+
+/// 64-bit FNV-1a of the text, as 16 hex digits.
+std::string hash_text(const std::string& text);
+
+/// Folder of case `index` inside the study directory: "cases/0007".
+std::string case_folder(int index);
+
+}  // namespace crackle::study
