@@ -1,0 +1,142 @@
+/// \file Modal driver: per-variant assembly and solve, open-to-uncracked mode pairing.
+#include "modal/modal.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <string>
+
+#include "core/errors.hpp"
+#include "core/resources.hpp"
+
+namespace crackle::modal {
+
+namespace {
+
+template <typename Value>
+Value parse_name(const std::string& name, const std::string& key,
+                 std::initializer_list<std::pair<const char*, Value>> choices) {
+  std::string accepted;
+  for (const auto& [text, value] : choices) {
+    if (name == text) return value;
+    accepted += (accepted.empty() ? "" : ", ") + std::string(text);
+  }
+  throw InputError(key + ": expected one of " + accepted + ", got '" + name + "'");
+}
+
+}  // namespace
+
+Solver parse_solver(const std::string& name, const std::string& key) {
+  return parse_name<Solver>(name, key, {{"slepc", Solver::slepc}, {"arpack", Solver::arpack}});
+}
+
+Factorization parse_factorization(const std::string& name, const std::string& key) {
+  return parse_name<Factorization>(name, key,
+                                   {{"automatic", Factorization::automatic},
+                                    {"cholmod", Factorization::cholmod},
+                                    {"mumps", Factorization::mumps}});
+}
+
+MacWeighting parse_mac_weighting(const std::string& name, const std::string& key) {
+  return parse_name<MacWeighting>(name, key, {{"mass", MacWeighting::mass}, {"plain", MacWeighting::plain}});
+}
+
+mesh::Variant parse_variant(const std::string& name, const std::string& key) {
+  return parse_name<mesh::Variant>(name, key,
+                                   {{"uncracked", mesh::Variant::uncracked}, {"open", mesh::Variant::open}});
+}
+
+const VariantResult* ModalResult::find(mesh::Variant variant) const {
+  for (const VariantResult& result : variants) {
+    if (result.variant == variant) return &result;
+  }
+  return nullptr;
+}
+
+MatrixX open_on_uncracked_dofs(const MatrixX& open_shapes, const VariantResult& open,
+                               const VariantResult& uncracked) {
+  // Mesh node standing for each uncracked DOF node: the original (lowest-numbered) one.
+  std::vector<Index> node_of(uncracked.dofs.n_dof_nodes, -1);
+  for (Index node = static_cast<Index>(uncracked.dofs.dof_node.size()) - 1; node >= 0; --node) {
+    node_of[uncracked.dofs.dof_node[node]] = node;
+  }
+  const std::vector<Index>& free_dofs = uncracked.constraints.free_dofs;
+  MatrixX mapped = MatrixX::Zero(static_cast<Index>(free_dofs.size()), open_shapes.cols());
+  for (std::size_t row = 0; row < free_dofs.size(); ++row) {
+    const Index node = node_of[free_dofs[row] / 3];
+    if (node < 0) continue;
+    const Index open_free = open.constraints.free_index[open.dofs.dof(node, free_dofs[row] % 3)];
+    if (open_free >= 0) mapped.row(static_cast<Index>(row)) = open_shapes.row(open_free);
+  }
+  return mapped;
+}
+
+std::vector<double> nodal_shape(const mesh::Mesh& mesh, const VariantResult& variant, int mode) {
+  std::vector<double> values(3 * static_cast<std::size_t>(mesh.n_nodes()), 0.0);
+  for (Index node = 0; node < mesh.n_nodes(); ++node) {
+    for (int c = 0; c < 3; ++c) {
+      const Index free = variant.constraints.free_index[variant.dofs.dof(node, c)];
+      if (free >= 0) values[3 * static_cast<std::size_t>(node) + c] = variant.modes.shapes(free, mode);
+    }
+  }
+  return values;
+}
+
+ModalResult run_modal(const mesh::Mesh& mesh, const fem::Materials& materials,
+                      const std::vector<fem::DirichletCondition>& conditions,
+                      const ModalOptions& options) {
+  Stopwatch total;
+  ModalResult result;
+  result.options = options;
+  if (result.options.variants.empty()) {
+    result.options.variants = {mesh::Variant::uncracked};
+    if (mesh.has_crack()) result.options.variants.push_back(mesh::Variant::open);
+  }
+  for (const mesh::Variant variant : result.options.variants) {
+    if (result.find(variant)) {
+      throw InputError(std::string("modal.variants lists '") + mesh::variant_name(variant) + "' twice");
+    }
+    VariantResult solved;
+    solved.variant = variant;
+    Stopwatch watch;
+    solved.dofs = mesh::make_dof_map(mesh, variant);
+    solved.constraints = fem::make_constraints(solved.dofs, conditions);
+    const SparseMatrix stiffness =
+        fem::restrict_to_free(fem::assemble_stiffness(mesh, solved.dofs, materials), solved.constraints);
+    if (options.lumped_mass) {
+      const VectorX lumped =
+          fem::restrict_to_free(fem::assemble_lumped_mass(mesh, solved.dofs, materials), solved.constraints);
+      solved.mass.resize(lumped.size(), lumped.size());
+      solved.mass.reserve(Eigen::VectorXi::Ones(lumped.size()));
+      for (Index i = 0; i < lumped.size(); ++i) solved.mass.insert(i, i) = lumped[i];
+      solved.mass.makeCompressed();
+    } else {
+      solved.mass = fem::restrict_to_free(fem::assemble_consistent_mass(mesh, solved.dofs, materials),
+                                          solved.constraints);
+    }
+    solved.n_pieces = count_pieces(mesh, solved.dofs);
+    const int n_rigid = count_rigid_body_modes(mesh, solved.dofs, solved.constraints);
+    solved.assembly_s = watch.seconds();
+    try {
+      solved.modes = solve_modes(stiffness, solved.mass, options, n_rigid);
+    } catch (const InputError& error) {
+      throw InputError(std::string("variant ") + mesh::variant_name(variant) + ": " + error.what());
+    } catch (const SolverError& error) {
+      throw SolverError(std::string("variant ") + mesh::variant_name(variant) + ": " + error.what());
+    }
+    result.variants.push_back(std::move(solved));
+  }
+
+  const VariantResult* uncracked = result.find(mesh::Variant::uncracked);
+  const VariantResult* open = result.find(mesh::Variant::open);
+  if (uncracked && open) {
+    const MatrixX open_shapes = open_on_uncracked_dofs(open->modes.shapes, *open, *uncracked);
+    result.mac = mac_matrix(uncracked->modes.shapes, open_shapes,
+                            options.mac == MacWeighting::mass ? &uncracked->mass : nullptr);
+    result.pairs = pair_modes(uncracked->modes.frequencies_hz, open->modes.frequencies_hz, result.mac);
+  }
+  result.total_s = total.seconds();
+  return result;
+}
+
+}  // namespace crackle::modal

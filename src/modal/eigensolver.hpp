@@ -1,0 +1,82 @@
+#pragma once
+/// \file Sparse generalized symmetric eigen-solvers for K phi = omega^2 M phi (MODEL.md eqs. 25a,
+/// 25c) by shift-and-invert around a shift sigma: the eigenvalues of (K - sigma M)^{-1} M are
+/// theta = 1 / (lambda - sigma), so the eigenvalues lambda nearest sigma converge first.
+///
+/// Two interchangeable backends:
+///  - SLEPc Krylov–Schur (EPSGHEP, STSINVERT, KSPPREONLY + PCCHOLESKY) over PETSC_COMM_WORLD with
+///    the matrices distributed by row ranges; sparse Cholesky by CHOLMOD or MUMPS;
+///  - ARPACK dsaupd/dseupd in mode 3 (shift-invert, B = M) with a CHOLMOD factorisation of
+///    K - sigma M, sequential (under MPI every rank solves the whole problem).
+#include <string>
+
+#include "core/types.hpp"
+
+namespace crackle::modal {
+
+/// Eigen-solver backend.
+enum class Solver { slepc, arpack };
+
+/// Sparse direct Cholesky used by the SLEPc backend.
+enum class Factorization {
+  automatic,  ///< CHOLMOD on one rank (fastest measured), MUMPS on several (CHOLMOD is sequential)
+  cholmod,
+  mumps,
+};
+
+const char* solver_name(Solver solver);
+const char* factorization_name(Factorization factorization);
+
+/// What one raw eigen-solve is asked to do.
+struct EigenOptions {
+  int n_eigenpairs = 10;       ///< eigenpairs nearest the shift to compute (rigid ones included)
+  double shift = 0.0;          ///< sigma [rad^2/s^2]; negative for bodies with rigid-body modes
+  Solver solver = Solver::slepc;
+  Factorization factorization = Factorization::automatic;
+  double tolerance = 1e-10;    ///< relative residual tolerance of the iteration
+  int max_iterations = 1000;   ///< restarts (Krylov–Schur) or Arnoldi iterations (ARPACK)
+};
+
+/// Raw eigenpairs as the backend returned them (every rank holds all of them).
+struct EigenPairs {
+  VectorX eigenvalues;  ///< lambda = omega^2 [rad^2/s^2], ascending
+  MatrixX vectors;      ///< one column per eigenvalue, over the DOFs of K
+  double factorization_s = 0.0;  ///< symbolic + numeric factorisation of K - sigma M
+  double iterations_s = 0.0;     ///< Krylov iterations, solves and eigenvector extraction
+  int iterations = 0;            ///< restarts (SLEPc) or Arnoldi update iterations (ARPACK)
+  int n_ranks = 1;               ///< MPI ranks the solve was distributed over
+  std::string factorization;     ///< package that factorised K - sigma M ("cholmod", "mumps")
+};
+
+/// Solves K x = lambda M x for the `n_eigenpairs` eigenvalues nearest `shift` with the chosen
+/// backend. K symmetric positive semi-definite, M symmetric positive definite, same size.
+/// SolverError (with the backend's message) if the factorisation or the iteration fails.
+/// The SLEPc backend needs SLEPc initialised (SlepcSession or SlepcInitialize in main) and is
+/// collective over PETSC_COMM_WORLD; every rank must pass the same K and M.
+EigenPairs solve_eigenpairs(const SparseMatrix& stiffness, const SparseMatrix& mass,
+                            const EigenOptions& options);
+
+EigenPairs solve_eigenpairs_slepc(const SparseMatrix& stiffness, const SparseMatrix& mass,
+                                  const EigenOptions& options);
+EigenPairs solve_eigenpairs_arpack(const SparseMatrix& stiffness, const SparseMatrix& mass,
+                                   const EigenOptions& options);
+
+/// Initialises SLEPc (and PETSc, MPI) for its lifetime; finalises in the destructor. PETSc reads
+/// its options from argv and PETSC_OPTIONS. Throws SolverError if initialisation fails.
+class SlepcSession {
+ public:
+  SlepcSession(int* argc, char*** argv);
+  ~SlepcSession();
+  SlepcSession(const SlepcSession&) = delete;
+  SlepcSession& operator=(const SlepcSession&) = delete;
+
+ private:
+  bool owns_ = false;
+};
+
+/// Rank of this process in PETSC_COMM_WORLD (0 when MPI is not initialised).
+int mpi_rank();
+/// Size of PETSC_COMM_WORLD (1 when MPI is not initialised).
+int mpi_size();
+
+}  // namespace crackle::modal

@@ -1,0 +1,186 @@
+/// \file Modal outputs: modal.json, modes.csv, mode-shape VTU files and the terminal table.
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "io/csv.hpp"
+#include "io/files.hpp"
+#include "io/vtu.hpp"
+#include "modal/modal.hpp"
+
+namespace crackle::modal {
+namespace {
+
+std::vector<double> to_std(const VectorX& values) { return {values.data(), values.data() + values.size()}; }
+
+std::string format(const char* pattern, double value) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, pattern, value);
+  return buffer;
+}
+
+}  // namespace
+
+nlohmann::json modal_json(const ModalResult& result) {
+  using nlohmann::json;
+  json document;
+  Index largest = 0;
+  double assembly = 0.0;
+  double factorization = 0.0;
+  double iterations = 0.0;
+  double postprocess = 0.0;
+  json variants = json::object();
+  for (const VariantResult& variant : result.variants) {
+    const ModeSet& modes = variant.modes;
+    largest = std::max(largest, variant.constraints.n_free());
+    assembly += variant.assembly_s;
+    factorization += modes.report.factorization_s;
+    iterations += modes.report.iterations_s;
+    postprocess += modes.report.postprocess_s;
+    variants[mesh::variant_name(variant.variant)] = {
+        {"frequencies_hz", to_std(modes.frequencies_hz)},
+        {"dofs", variant.dofs.n_dofs()},
+        {"free_dofs", variant.constraints.n_free()},
+        {"pieces", variant.n_pieces},
+        {"rigid_body_modes", modes.n_rigid()},
+        {"rigid_body_modes_expected", modes.n_rigid_expected},
+        {"rigid_frequencies_hz", to_std(modes.rigid_frequencies_hz)},
+        {"orthogonality_error", modes.orthogonality_error},
+        {"backend_orthogonality_error", modes.backend_orthogonality_error},
+        {"max_relative_residual", modes.max_residual},
+        {"shift_rad2_s2", modes.report.shift},
+        {"reference_eigenvalue_rad2_s2", modes.report.reference_eigenvalue},
+        {"eigenpairs_computed", modes.report.n_eigenpairs},
+        {"iterations", modes.report.iterations},
+        {"attempts", modes.report.attempts},
+        {"timings_s",
+         {{"assembly", variant.assembly_s},
+          {"factorization", modes.report.factorization_s},
+          {"iterations", modes.report.iterations_s},
+          {"solve", modes.report.solve_s},
+          {"postprocess", modes.report.postprocess_s}}},
+    };
+  }
+  document["dofs"] = largest;  // free DOFs of the largest eigenproblem solved
+  document["variants"] = variants;
+  json pairs = json::array();
+  for (const ModePair& pair : result.pairs) {
+    pairs.push_back({{"uncracked_mode", pair.uncracked_mode + 1},
+                     {"open_mode", pair.open_mode + 1},
+                     {"f_uncracked_hz", pair.f_uncracked_hz},
+                     {"f_open_hz", pair.f_open_hz},
+                     {"ratio", pair.ratio},
+                     {"mac", pair.mac},
+                     {"f_bilinear_hz", pair.f_bilinear_hz}});
+  }
+  document["pairs"] = pairs;
+  json mac = json::array();  // MAC[uncracked mode][open mode], for spotting mode mixing
+  for (Index i = 0; i < result.mac.rows(); ++i) {
+    std::vector<double> row(result.mac.cols());
+    for (Index j = 0; j < result.mac.cols(); ++j) row[j] = result.mac(i, j);
+    mac.push_back(row);
+  }
+  document["mac_matrix"] = mac;
+  document["mac_weighting"] = result.options.mac == MacWeighting::mass ? "mass" : "plain";
+  const SolveReport* report = result.variants.empty() ? nullptr : &result.variants.front().modes.report;
+  document["solver"] = {
+      {"backend", solver_name(result.options.solver)},
+      {"method", result.options.solver == Solver::slepc ? "Krylov-Schur, shift-and-invert"
+                                                        : "implicitly restarted Lanczos (dsaupd mode 3)"},
+      {"factorization", report ? report->factorization : ""},
+      {"ranks", report ? report->n_ranks : 1},
+      {"tolerance", result.options.tolerance},
+      {"mass", result.options.lumped_mass ? "lumped" : "consistent"},
+      {"modes", result.options.modes},
+  };
+  document["timings_s"] = {{"assembly", assembly},
+                           {"factorization", factorization},
+                           {"iterations", iterations},
+                           {"postprocess", postprocess},
+                           {"total", result.total_s}};
+  return document;
+}
+
+std::string modal_table(const ModalResult& result) {
+  std::string text;
+  if (!result.pairs.empty()) {
+    text += " mode  f_uncracked [Hz]      f_open [Hz]  open#    ratio      MAC  f_bilinear [Hz]\n";
+    for (const ModePair& pair : result.pairs) {
+      char line[200];
+      std::snprintf(line, sizeof line, "%5d %17.6g %16.6g %6d %8.5f %8.4f %16.6g\n", pair.uncracked_mode + 1,
+                    pair.f_uncracked_hz, pair.f_open_hz, pair.open_mode + 1, pair.ratio, pair.mac,
+                    pair.f_bilinear_hz);
+      text += line;
+    }
+  } else {
+    text += " mode";
+    for (const VariantResult& variant : result.variants) {
+      char header[64];
+      std::snprintf(header, sizeof header, " %20s", (std::string("f_") + mesh::variant_name(variant.variant) + " [Hz]").c_str());
+      text += header;
+    }
+    text += "\n";
+    const int modes = result.variants.empty() ? 0 : result.variants.front().modes.n_modes();
+    for (int mode = 0; mode < modes; ++mode) {
+      text += format("%5.0f", mode + 1);
+      for (const VariantResult& variant : result.variants) text += format(" %20.6g", variant.modes.frequencies_hz[mode]);
+      text += "\n";
+    }
+  }
+  for (const VariantResult& variant : result.variants) {
+    if (variant.modes.n_rigid() > 0) {
+      text += std::string("(") + mesh::variant_name(variant.variant) + ": " +
+              std::to_string(variant.modes.n_rigid()) + " rigid-body modes not listed)\n";
+    }
+  }
+  return text;
+}
+
+void write_modal_outputs(const std::filesystem::path& directory, const mesh::Mesh& mesh,
+                         const ModalResult& result) {
+  io::ensure_directory(directory);
+  io::write_json(directory / "modal.json", modal_json(result));
+
+  io::CsvTable table;
+  if (!result.pairs.empty()) {
+    std::vector<double> mode, f_u, open_mode, f_o, ratio, mac, f_b;
+    for (const ModePair& pair : result.pairs) {
+      mode.push_back(pair.uncracked_mode + 1);
+      f_u.push_back(pair.f_uncracked_hz);
+      open_mode.push_back(pair.open_mode + 1);
+      f_o.push_back(pair.f_open_hz);
+      ratio.push_back(pair.ratio);
+      mac.push_back(pair.mac);
+      f_b.push_back(pair.f_bilinear_hz);
+    }
+    table.add("mode [-]", mode);
+    table.add("f_uncracked [Hz]", f_u);
+    table.add("open_mode [-]", open_mode);
+    table.add("f_open [Hz]", f_o);
+    table.add("ratio [-]", ratio);
+    table.add("mac [-]", mac);
+    table.add("f_bilinear [Hz]", f_b);
+  } else if (!result.variants.empty()) {
+    std::vector<double> mode;
+    for (int i = 0; i < result.variants.front().modes.n_modes(); ++i) mode.push_back(i + 1);
+    table.add("mode [-]", mode);
+    for (const VariantResult& variant : result.variants) {
+      table.add(std::string("f_") + mesh::variant_name(variant.variant) + " [Hz]",
+                to_std(variant.modes.frequencies_hz));
+    }
+  }
+  io::write_csv(directory / "modes.csv", table);
+
+  for (const VariantResult& variant : result.variants) {
+    std::vector<io::PointField> fields;
+    for (int mode = 0; mode < variant.modes.n_modes(); ++mode) {
+      char name[32];
+      std::snprintf(name, sizeof name, "mode_%02d", mode + 1);
+      fields.push_back({name, 3, nodal_shape(mesh, variant, mode)});
+    }
+    io::write_vtu(directory / (std::string("modes_") + mesh::variant_name(variant.variant) + ".vtu"), mesh,
+                  fields);
+  }
+}
+
+}  // namespace crackle::modal

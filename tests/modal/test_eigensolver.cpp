@@ -1,0 +1,190 @@
+// Eigen-solver backends against a pencil with a known spectrum: linear finite elements of a bar,
+// K = (E A / h) tridiag(-1, 2, -1), M = (rho A h / 6) tridiag(1, 4, 1), whose discrete eigenvalues
+// are lambda_k = (6 E / (rho h^2)) (1 - cos theta_k) / (2 + cos theta_k),
+// theta_k = k pi / (n + 1) fixed-fixed (n interior nodes) and k pi / N free-free (N elements).
+#include <gtest/gtest.h>
+#include <petscsys.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "core/errors.hpp"
+#include "modal/eigensolver.hpp"
+#include "modal/modal.hpp"
+
+namespace crackle::modal {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kYoung = 2.0e11;
+constexpr double kDensity = 7800.0;
+
+struct BarPencil {
+  SparseMatrix stiffness;
+  SparseMatrix mass;
+  std::vector<double> exact;  ///< ascending eigenvalues
+};
+
+/// Bar of length 1 with `elements` elements; fixed-fixed (interior nodes only) or free-free.
+BarPencil bar_pencil(int elements, bool free_free) {
+  const double h = 1.0 / elements;
+  const int first = free_free ? 0 : 1;
+  const int n = free_free ? elements + 1 : elements - 1;
+  std::vector<Eigen::Triplet<double, Index>> k, m;
+  for (int e = 0; e < elements; ++e) {
+    const int nodes[2] = {e - first, e + 1 - first};
+    for (int a = 0; a < 2; ++a) {
+      for (int b = 0; b < 2; ++b) {
+        if (nodes[a] < 0 || nodes[a] >= n || nodes[b] < 0 || nodes[b] >= n) continue;
+        k.emplace_back(nodes[a], nodes[b], (a == b ? 1.0 : -1.0) * kYoung / h);
+        m.emplace_back(nodes[a], nodes[b], (a == b ? 2.0 : 1.0) * kDensity * h / 6.0);
+      }
+    }
+  }
+  BarPencil pencil;
+  pencil.stiffness.resize(n, n);
+  pencil.mass.resize(n, n);
+  pencil.stiffness.setFromTriplets(k.begin(), k.end());
+  pencil.mass.setFromTriplets(m.begin(), m.end());
+  for (int mode = free_free ? 0 : 1; mode <= (free_free ? elements : elements - 1); ++mode) {
+    const double theta = mode * kPi / elements;
+    pencil.exact.push_back(6.0 * kYoung / (kDensity * h * h) * (1.0 - std::cos(theta)) / (2.0 + std::cos(theta)));
+  }
+  return pencil;
+}
+
+void expect_spectrum(const EigenPairs& pairs, const BarPencil& pencil, int offset, double tolerance) {
+  for (Index i = 0; i < pairs.eigenvalues.size(); ++i) {
+    const double exact = pencil.exact[offset + i];
+    EXPECT_NEAR(pairs.eigenvalues[i], exact, tolerance * exact) << "eigenvalue " << i;
+  }
+}
+
+TEST(Eigensolver, SlepcCholmodFixedFixedBar) {
+  const BarPencil pencil = bar_pencil(2000, false);
+  EigenOptions options;
+  options.n_eigenpairs = 8;
+  options.shift = -1.0;
+  options.factorization = Factorization::cholmod;
+  const EigenPairs pairs = solve_eigenpairs(pencil.stiffness, pencil.mass, options);
+  EXPECT_EQ(pairs.factorization, "cholmod");
+  expect_spectrum(pairs, pencil, 0, 1e-10);
+}
+
+TEST(Eigensolver, SlepcMumpsFixedFixedBar) {
+  const BarPencil pencil = bar_pencil(2000, false);
+  EigenOptions options;
+  options.n_eigenpairs = 8;
+  options.shift = -1.0;
+  options.factorization = Factorization::mumps;
+  const EigenPairs pairs = solve_eigenpairs(pencil.stiffness, pencil.mass, options);
+  EXPECT_EQ(pairs.factorization, "mumps");
+  expect_spectrum(pairs, pencil, 0, 1e-10);
+}
+
+TEST(Eigensolver, ArpackFixedFixedBar) {
+  const BarPencil pencil = bar_pencil(2000, false);
+  EigenOptions options;
+  options.n_eigenpairs = 8;
+  options.shift = -1.0;
+  options.solver = Solver::arpack;
+  const EigenPairs pairs = solve_eigenpairs(pencil.stiffness, pencil.mass, options);
+  expect_spectrum(pairs, pencil, 0, 1e-10);
+}
+
+TEST(Eigensolver, BackendsAgreeToRoundOff) {
+  const BarPencil pencil = bar_pencil(3000, false);
+  EigenOptions options;
+  options.n_eigenpairs = 12;
+  options.shift = -1.0;
+  const EigenPairs slepc = solve_eigenpairs(pencil.stiffness, pencil.mass, options);
+  options.solver = Solver::arpack;
+  const EigenPairs arpack = solve_eigenpairs(pencil.stiffness, pencil.mass, options);
+  for (int i = 0; i < options.n_eigenpairs; ++i) {
+    EXPECT_NEAR(slepc.eigenvalues[i], arpack.eigenvalues[i], 1e-10 * arpack.eigenvalues[i]);
+  }
+}
+
+TEST(Eigensolver, SolveModesNormalisesAndSeparatesRigidModes) {
+  const BarPencil pencil = bar_pencil(1000, true);
+  for (const Solver solver : {Solver::slepc, Solver::arpack}) {
+    ModalOptions options;
+    options.modes = 6;
+    options.solver = solver;
+    const ModeSet modes = solve_modes(pencil.stiffness, pencil.mass, options, 1);
+    ASSERT_EQ(modes.n_rigid(), 1);
+    ASSERT_EQ(modes.n_modes(), 6);
+    EXPECT_EQ(modes.report.attempts, 1);
+    for (int i = 0; i < 6; ++i) {
+      const double exact_hz = std::sqrt(pencil.exact[1 + i]) / (2.0 * kPi);
+      EXPECT_NEAR(modes.frequencies_hz[i], exact_hz, 1e-10 * exact_hz);
+    }
+    EXPECT_LT(modes.orthogonality_error, 1e-9) << solver_name(solver);
+    EXPECT_LT(modes.max_residual, 1e-8);
+    EXPECT_LT(std::abs(modes.rigid_frequencies_hz[0]), 1e-6 * modes.frequencies_hz[0]);
+    // The rigid mode of a bar is a uniform translation: constant, mass-normalised, positive.
+    const VectorX& rigid = modes.rigid_shapes.col(0);
+    EXPECT_NEAR(rigid.minCoeff(), rigid.maxCoeff(), 1e-8 * rigid.maxCoeff());
+    EXPECT_NEAR(rigid.dot(pencil.mass * rigid), 1.0, 1e-12);
+  }
+}
+
+TEST(Eigensolver, UnexpectedZeroModeTriggersRetry) {
+  const BarPencil pencil = bar_pencil(500, true);
+  ModalOptions options;
+  options.modes = 4;
+  const ModeSet modes = solve_modes(pencil.stiffness, pencil.mass, options, 0);
+  EXPECT_EQ(modes.n_rigid(), 1);
+  EXPECT_EQ(modes.n_modes(), 4);
+  EXPECT_EQ(modes.report.attempts, 2);
+  const double exact_hz = std::sqrt(pencil.exact[1]) / (2.0 * kPi);
+  EXPECT_NEAR(modes.frequencies_hz[0], exact_hz, 1e-10 * exact_hz);
+}
+
+TEST(Eigensolver, TooManyModesIsAnInputError) {
+  const BarPencil pencil = bar_pencil(10, false);
+  ModalOptions options;
+  options.modes = 12;
+  EXPECT_THROW(solve_modes(pencil.stiffness, pencil.mass, options, 0), InputError);
+  options.modes = 9;
+  EXPECT_THROW(solve_modes(pencil.stiffness, pencil.mass, options, 1), InputError);
+}
+
+TEST(Eigensolver, PetscErrorBecomesSolverError) {
+  // A bad PETSc option makes EPSSetFromOptions fail inside PETSc: it must surface as a
+  // SolverError naming the call and PETSc's message, not abort the process.
+  const BarPencil pencil = bar_pencil(50, false);
+  EigenOptions options;
+  options.n_eigenpairs = 3;
+  options.shift = -1.0;
+  ASSERT_EQ(PetscOptionsSetValue(nullptr, "-eps_type", "no_such_solver"), 0);
+  try {
+    solve_eigenpairs(pencil.stiffness, pencil.mass, options);
+    ADD_FAILURE() << "no exception";
+  } catch (const SolverError& error) {
+    EXPECT_NE(std::string(error.what()).find("no_such_solver"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("EPSSetFromOptions"), std::string::npos) << error.what();
+  }
+  ASSERT_EQ(PetscOptionsClearValue(nullptr, "-eps_type"), 0);
+  EXPECT_NO_THROW(solve_eigenpairs(pencil.stiffness, pencil.mass, options));
+}
+
+TEST(Eigensolver, MacOfIdenticalAndOrthogonalShapes) {
+  MatrixX a = MatrixX::Identity(4, 2);
+  MatrixX b(4, 2);
+  b << 2, 0, 0, 1, 0, 1, 0, 0;
+  const MatrixX mac = mac_matrix(a, b, nullptr);
+  EXPECT_DOUBLE_EQ(mac(0, 0), 1.0);
+  EXPECT_DOUBLE_EQ(mac(0, 1), 0.0);
+  EXPECT_DOUBLE_EQ(mac(1, 1), 0.5);
+  const std::vector<ModePair> pairs = pair_modes(VectorX::Constant(2, 10.0), VectorX::Constant(2, 8.0), mac);
+  ASSERT_EQ(pairs.size(), 2u);
+  EXPECT_EQ(pairs[0].open_mode, 0);
+  EXPECT_EQ(pairs[1].open_mode, 1);
+  EXPECT_NEAR(pairs[0].f_bilinear_hz, 2.0 * 10 * 8 / 18.0, 1e-12);
+  EXPECT_NEAR(pairs[0].ratio, 0.8, 1e-15);
+}
+
+}  // namespace
+}  // namespace crackle::modal
