@@ -1,7 +1,11 @@
 #pragma once
 /// \file The subcommands of the `crackle` executable, callable from tests.
+#include <filesystem>
 #include <iosfwd>
 #include <string>
+
+#include "modal/modal.hpp"
+#include "scene/scene.hpp"
 
 namespace crackle::app {
 
@@ -13,5 +17,21 @@ struct CheckOptions {
 /// `crackle check`: validates a scene and prints a summary (nodes, elements, DOFs, crack pairs,
 /// total mass, assembly time). Throws InputError on a bad scene.
 void run_check(const CheckOptions& options, std::ostream& out);
+
+struct ModalCommandOptions {
+  std::string scene_path;
+  std::filesystem::path output_directory = "out";
+  int modes = 0;       ///< overrides modal.modes when > 0
+  std::string solver;  ///< overrides modal.solver when not empty
+  std::filesystem::path modal_cache;  ///< folder sharing the uncracked solve between runs
+};
+
+/// The scene's `modal:` section as options of the modal module.
+modal::ModalOptions modal_options(const scene::ModalSection& section);
+
+/// `crackle modal`: eigenmodes of the uncracked and open-crack body; writes modal.json,
+/// modes.csv and the mode shapes (VTU) into the output directory, prints the pairing table.
+/// Needs SLEPc initialised (modal::SlepcSession). Under MPI only rank 0 writes and prints.
+void run_modal_command(const ModalCommandOptions& options, std::ostream& out);
 
 }  // namespace crackle::app

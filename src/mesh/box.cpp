@@ -83,14 +83,18 @@ std::string check_crack(const BoxSpec& box, const CrackSpec& crack) {
 
 std::array<std::vector<double>, 3> grid_lines(const BoxSpec& box, const std::optional<CrackSpec>& crack) {
   std::array<std::vector<double>, 3> lines;
-  for (int axis = 0; axis < 3; ++axis) lines[axis] = uniform_lines(box, axis);
+  auto add_line = [&](int axis, double position) {
+    if (find_line(lines[axis], position, tolerance(box, axis)) >= 0) return;
+    if (position <= box.origin[axis] || position >= box.origin[axis] + box.size[axis]) return;
+    lines[axis].insert(std::upper_bound(lines[axis].begin(), lines[axis].end(), position), position);
+  };
+  for (int axis = 0; axis < 3; ++axis) {
+    lines[axis] = uniform_lines(box, axis);
+    for (double position : box.extra_lines[axis]) add_line(axis, position);
+  }
   if (!crack) return lines;
   for (int t : in_plane_axes(crack->normal)) {
-    for (double edge : crack->region[t]) {
-      if (find_line(lines[t], edge, tolerance(box, t)) >= 0) continue;
-      if (edge <= box.origin[t] || edge >= box.origin[t] + box.size[t]) continue;
-      lines[t].insert(std::upper_bound(lines[t].begin(), lines[t].end(), edge), edge);
-    }
+    for (double edge : crack->region[t]) add_line(t, edge);
   }
   return lines;
 }

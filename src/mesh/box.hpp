@@ -24,10 +24,13 @@ struct BoxSpec {
   Vec3 size = Vec3::Ones();
   std::array<int, 3> cells{1, 1, 1};
   int order = 1;
+  /// Grid lines added to the uniform ones along each axis [m] (those on or outside the boundary,
+  /// and repeats, are ignored).
+  std::array<std::vector<double>, 3> extra_lines;
 };
 
-/// Grid-line positions along each axis: the uniform lines of `box` plus the lines that crack edges
-/// need (a crack edge strictly inside a cell splits that cell).
+/// Grid-line positions along each axis: the uniform lines of `box`, its extra lines, and the lines
+/// that crack edges need (a crack edge strictly inside a cell splits that cell).
 std::array<std::vector<double>, 3> grid_lines(const BoxSpec& box, const std::optional<CrackSpec>& crack);
 
 /// What is wrong with a crack in a box, or an empty string if nothing is. The first word of the

@@ -1,5 +1,6 @@
 /// \file Modal driver: per-variant assembly and solve, open-to-uncracked mode pairing.
 #include "modal/modal.hpp"
+#include "modal/cache.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -117,8 +118,17 @@ ModalResult run_modal(const mesh::Mesh& mesh, const fem::Materials& materials,
     solved.n_pieces = count_pieces(mesh, solved.dofs);
     const int n_rigid = count_rigid_body_modes(mesh, solved.dofs, solved.constraints);
     solved.assembly_s = watch.seconds();
+    const bool cached = variant == mesh::Variant::uncracked && !options.cache_directory.empty();
+    const std::uint64_t key = cached ? problem_key(stiffness, solved.mass, options) : 0;
+    std::optional<ModeSet> from_cache;
+    if (cached) from_cache = load_cached_modes(options.cache_directory, key, solved.constraints.n_free());
     try {
-      solved.modes = solve_modes(stiffness, solved.mass, options, n_rigid);
+      if (from_cache) {
+        solved.modes = std::move(*from_cache);
+      } else {
+        solved.modes = solve_modes(stiffness, solved.mass, options, n_rigid);
+        if (cached && is_output_rank()) store_cached_modes(options.cache_directory, key, solved.modes);
+      }
     } catch (const InputError& error) {
       throw InputError(std::string("variant ") + mesh::variant_name(variant) + ": " + error.what());
     } catch (const SolverError& error) {

@@ -44,6 +44,10 @@ struct ModalOptions {
   /// lambda_ref = tr K / tr M (the mean eigenvalue of the discrete pencil).
   double rigid_tolerance = 1e-6;
   MacWeighting mac = MacWeighting::mass;
+  /// If not empty: the uncracked solve is looked up in (and stored into) this folder, keyed by a
+  /// fingerprint of K, M and the options (modal/cache.hpp). A parameter study shares it between
+  /// cases whose uncracked body is the same.
+  std::filesystem::path cache_directory;
 };
 
 /// Statistics of one eigen-solve.
@@ -60,6 +64,7 @@ struct SolveReport {
   double iterations_s = 0.0;          ///< all attempts
   double solve_s = 0.0;  ///< whole backend calls (factorisation, iterations, set-up, clean-up)
   double postprocess_s = 0.0;  ///< normalisation, Rayleigh–Ritz, orthogonality and residual checks
+  bool from_cache = false;     ///< read from ModalOptions::cache_directory instead of solved
 };
 
 /// Modes of one eigenproblem over its free DOFs.

@@ -53,6 +53,7 @@ nlohmann::json modal_json(const ModalResult& result) {
         {"eigenpairs_computed", modes.report.n_eigenpairs},
         {"iterations", modes.report.iterations},
         {"attempts", modes.report.attempts},
+        {"from_cache", modes.report.from_cache},
         {"timings_s",
          {{"assembly", variant.assembly_s},
           {"factorization", modes.report.factorization_s},

@@ -585,8 +585,14 @@ StudyPlan plan_study(const std::string& text, const std::string& file) {
     for (int axis = 0; axis < 3; ++axis) {
       if (lines[axis].empty()) continue;
       std::set<double> merged(lines[axis].begin(), lines[axis].end());
-      const YAML::Node given = base_document["mesh"]["box"]["lines"][kAxes[axis]];
-      if (given.IsSequence()) {
+      // Look the existing lines up through const nodes: indexing a missing key of a non-const
+      // node makes a node that throws when indexed again.
+      const YAML::Node& root = base_document;
+      YAML::Node given;
+      if (root["mesh"] && root["mesh"]["box"] && root["mesh"]["box"]["lines"]) {
+        given = root["mesh"]["box"]["lines"][kAxes[axis]];
+      }
+      if (given && given.IsSequence()) {
         for (const auto& item : given) {
           double value = 0;
           if (parse_number(item.Scalar(), value)) merged.insert(value);

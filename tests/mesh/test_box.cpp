@@ -208,3 +208,16 @@ TEST(BoxMesh, CrackChecks) {
   EXPECT_EQ(check_crack(box, crack), "region.z: expected a range inside the body, z in [0, 0.01], got [0.007, 0.012]");
   EXPECT_THROW(build_box_mesh(box, crack), InputError);
 }
+
+TEST(BoxMesh, ExtraLinesAreMergedWithCrackEdges) {
+  BoxSpec box = beam_box(1);
+  box.extra_lines[kZ] = {0.007, 0.008, 0.01, 0.02, 0.008};  // repeat, boundary, outside: ignored
+  auto lines = grid_lines(box, edge_crack());
+  EXPECT_EQ(lines[kZ], (std::vector<double>{0.0, 0.005, 0.007, 0.008, 0.01}));
+  // The crack's own mesh and the uncracked mesh with the same extra lines have the same elements.
+  Mesh cracked = build_box_mesh(box, edge_crack());
+  box.extra_lines[kZ].push_back(0.007);
+  Mesh plain = build_box_mesh(box);
+  EXPECT_EQ(cracked.n_elements(), plain.n_elements());
+  EXPECT_EQ(cracked.n_original_nodes, plain.n_nodes());
+}

@@ -1,0 +1,41 @@
+#include <iostream>
+
+#include "commands.hpp"
+#include "core/errors.hpp"
+#include "io/files.hpp"
+#include "model.hpp"
+#include "modal/modal.hpp"
+#include "scene/scene.hpp"
+
+namespace crackle::app {
+
+modal::ModalOptions modal_options(const scene::ModalSection& section) {
+  modal::ModalOptions options;
+  options.modes = section.modes;
+  for (const std::string& name : section.variants) {
+    options.variants.push_back(name == "open" ? mesh::Variant::open : mesh::Variant::uncracked);
+  }
+  options.solver = section.solver == "arpack" ? modal::Solver::arpack : modal::Solver::slepc;
+  options.lumped_mass = section.mass == "lumped";
+  return options;
+}
+
+void run_modal_command(const ModalCommandOptions& options, std::ostream& out) {
+  const scene::Scene scene = scene::load_scene(options.scene_path);
+  scene::ModalSection section = scene.modal;
+  if (options.modes > 0) section.modes = options.modes;
+  if (!options.solver.empty()) section.solver = options.solver;
+  const Model model = build_model(scene);
+  const bool writer = modal::is_output_rank();
+  // Fail on an unwritable output directory before the solve, not after it.
+  if (writer) io::ensure_directory(options.output_directory);
+  modal::ModalOptions modal_settings = modal_options(section);
+  modal_settings.cache_directory = options.modal_cache;
+  const modal::ModalResult result = modal::run_modal(model.mesh, model.materials, model.dirichlet, modal_settings);
+  if (!writer) return;
+  modal::write_modal_outputs(options.output_directory, model.mesh, result);
+  out << modal::modal_table(result);
+  out << "wrote " << (options.output_directory / "modal.json").string() << ", modes.csv and the mode shapes (VTU)\n";
+}
+
+}  // namespace crackle::app
