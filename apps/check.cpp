@@ -12,7 +12,7 @@ namespace crackle::app {
 
 void run_check(const CheckOptions& options, std::ostream& out) {
   Stopwatch clock;
-  const scene::Scene scene = scene::load_scene(options.scene_path);
+  const scene::Scene scene = scene::load_scene(options.scene_path, parse_overrides(options.overrides));
   Model model = build_model(scene);
   const double mesh_seconds = clock.seconds();
   const mesh::Mesh& mesh = model.mesh;

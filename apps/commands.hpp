@@ -3,14 +3,19 @@
 #include <filesystem>
 #include <iosfwd>
 #include <string>
+#include <vector>
 
 #include "modal/modal.hpp"
 #include "scene/scene.hpp"
 
 namespace crackle::app {
 
+/// `--set key.path=value` arguments: scene overrides (validated like the file's own values).
+std::vector<scene::Override> parse_overrides(const std::vector<std::string>& assignments);
+
 struct CheckOptions {
   std::string scene_path;
+  std::vector<std::string> overrides;  ///< `key.path=value`
   bool assemble = true;  ///< assemble K and the lumped M to report mass and assembly time
 };
 
@@ -20,11 +25,24 @@ void run_check(const CheckOptions& options, std::ostream& out);
 
 struct ModalCommandOptions {
   std::string scene_path;
+  std::vector<std::string> overrides;  ///< `key.path=value`
   std::filesystem::path output_directory = "out";
   int modes = 0;       ///< overrides modal.modes when > 0
   std::string solver;  ///< overrides modal.solver when not empty
   std::filesystem::path modal_cache;  ///< folder sharing the uncracked solve between runs
 };
+
+struct RunCommandOptions {
+  std::string scene_path;
+  std::vector<std::string> overrides;  ///< `key.path=value`
+  std::filesystem::path output_directory = "out";
+  std::filesystem::path modal_cache;  ///< folder sharing the uncracked solve between runs
+  bool progress = true;               ///< progress line (also needs transient.progress)
+};
+
+/// `crackle run`: modal (only if needed) -> transient -> spectrum; writes run.json (the stages
+/// that ran, and why, with their times) and each stage's outputs into the output directory.
+void run_run_command(const RunCommandOptions& options, std::ostream& out);
 
 /// The scene's `modal:` section as options of the modal module.
 modal::ModalOptions modal_options(const scene::ModalSection& section);

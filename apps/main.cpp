@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   CLI::App* check_command = cli.add_subcommand(
       "check", "Validate a scene, mesh it, assemble K and the lumped mass, and print a summary");
   check_command->add_option("scene", check.scene_path, "Scene file (YAML)")->required();
+  check_command->add_option("--set", check.overrides, "Override a scene value: --set key.path=value (repeatable)");
   check_command->add_flag("!--no-assembly", check.assemble, "Skip assembling K and M");
 
   app::ModalCommandOptions modal;
@@ -25,6 +26,7 @@ int main(int argc, char** argv) {
       "modal", "Eigenmodes of the uncracked (faces tied) and open-crack body, paired by MAC, with the "
                "bilinear frequency of each pair. PETSc/SLEPc options may follow, e.g. -eps_view");
   modal_command->add_option("scene", modal.scene_path, "Scene file (YAML)")->required();
+  modal_command->add_option("--set", modal.overrides, "Override a scene value: --set key.path=value (repeatable)");
   modal_command->add_option("-o,--output", modal.output_directory, "Output directory")->capture_default_str();
   modal_command->add_option("--modes", modal.modes, "Number of modes (overrides modal.modes)");
   modal_command->add_option("--solver", modal.solver, "slepc or arpack (overrides modal.solver)")
@@ -32,6 +34,19 @@ int main(int argc, char** argv) {
   modal_command->add_option("--modal-cache", modal.modal_cache,
                             "Folder where the uncracked solve is looked up and stored (shared by study cases)");
   modal_command->allow_extras();
+
+  app::RunCommandOptions run;
+  bool quiet = false;
+  CLI::App* run_command = cli.add_subcommand(
+      "run", "The scene's pipeline: modal (only if a mode is referred to or modal: is given) -> transient "
+             "(explicit dynamics with crack-face contact) -> spectrum (harmonics, damage indices, plots)");
+  run_command->add_option("scene", run.scene_path, "Scene file (YAML)")->required();
+  run_command->add_option("--set", run.overrides, "Override a scene value: --set key.path=value (repeatable)");
+  run_command->add_option("-o,--output", run.output_directory, "Output directory")->capture_default_str();
+  run_command->add_option("--modal-cache", run.modal_cache,
+                          "Folder where the uncracked solve is looked up and stored (shared by study cases)");
+  run_command->add_flag("-q,--quiet", quiet, "No progress line");
+  run_command->allow_extras();
 
   study::StudyOptions study_options;
   study_options.executable = "/proc/self/exe";
@@ -67,6 +82,17 @@ int main(int argc, char** argv) {
       char** petsc_args = petsc_argv.data();
       modal::SlepcSession session(&petsc_argc, &petsc_args);
       app::run_modal_command(modal, std::cout);
+    }
+    if (*run_command) {
+      run.progress = !quiet;
+      std::vector<std::string> extras = run_command->remaining();
+      std::vector<char*> petsc_argv{argv[0]};
+      for (std::string& extra : extras) petsc_argv.push_back(extra.data());
+      int petsc_argc = static_cast<int>(petsc_argv.size());
+      petsc_argv.push_back(nullptr);
+      char** petsc_args = petsc_argv.data();
+      modal::SlepcSession session(&petsc_argc, &petsc_args);
+      app::run_run_command(run, std::cout);
     }
     if (*study_command) {
       study_options.modal_cache = !no_modal_cache;

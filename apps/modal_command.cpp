@@ -21,7 +21,7 @@ modal::ModalOptions modal_options(const scene::ModalSection& section) {
 }
 
 void run_modal_command(const ModalCommandOptions& options, std::ostream& out) {
-  const scene::Scene scene = scene::load_scene(options.scene_path);
+  const scene::Scene scene = scene::load_scene(options.scene_path, parse_overrides(options.overrides));
   scene::ModalSection section = scene.modal;
   if (options.modes > 0) section.modes = options.modes;
   if (!options.solver.empty()) section.solver = options.solver;

@@ -1,5 +1,7 @@
 #include "model.hpp"
 
+#include "commands.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -122,6 +124,18 @@ void assign_materials(const scene::Scene& scene, Model& model) {
 }
 
 }  // namespace
+
+std::vector<scene::Override> parse_overrides(const std::vector<std::string>& assignments) {
+  std::vector<scene::Override> overrides;
+  for (const std::string& assignment : assignments) {
+    const std::size_t equals = assignment.find('=');
+    if (equals == std::string::npos || equals == 0) {
+      throw InputError("--set: expected key.path=value, got '" + assignment + "'");
+    }
+    overrides.push_back({assignment.substr(0, equals), assignment.substr(equals + 1)});
+  }
+  return overrides;
+}
 
 Model build_model(const scene::Scene& scene) {
   Model model;

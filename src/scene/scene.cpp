@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -43,35 +44,86 @@ Param build_parameters() {
         integer("cells", "Elements per direction; grid lines are added where crack edges need them.")
             .at_least(1).list(3).required(),
         integer("order", "Element order p (Lagrange elements on GLL nodes).").at_least(1).at_most(4).required(),
+        map_of("lines", "Extra grid lines along each axis, added to the uniform ones (a study puts the "
+                        "crack edges of all its cases here so that they share one mesh); lines on or "
+                        "outside the boundary and repeated lines are ignored.", {
+          number("x", "Positions along x.").with_unit("m").list(1, 100000),
+          number("y", "Positions along y.").with_unit("m").list(1, 100000),
+          number("z", "Positions along z.").with_unit("m").list(1, 100000),
+        }).optional_section(),
       }),
+      text("gmsh", "Gmsh MSH 4.1 file (ASCII or binary), relative to the scene file's folder: 8- or 27-node "
+                   "hexahedra or 4- or 10-node tetrahedra. Its physical groups name faces, cracks and "
+                   "material regions."),
     }).required(),
-    map_of("material", "Isotropic linear elastic material (MODEL.md eq. 2).", {
+    map_of("material", "Isotropic linear elastic material of the whole body (MODEL.md eq. 2); or give "
+                       "materials.", {
       number("E", "Young's modulus.").with_unit("Pa").above(0).required(),
       number("nu", "Poisson's ratio.").above(-1).below(0.5).required(),
       number("rho", "Mass density.").with_unit("kg/m^3").above(0).required(),
-    }).required(),
-    list_of("boundary", "Prescribed displacements on box faces; none: a free body.", {
-      choice("face", "Face of the box.", {faces.begin(), faces.end()}).required(),
+    }),
+    list_of("materials", "Materials by region (layered composites), instead of material: each element takes the "
+                         "one material whose region holds its centroid.", {
+      text("name", "Name of the material, for messages and outputs.").required(),
+      map_of("isotropic", "Isotropic elastic constants (give isotropic or orthotropic).", {
+        number("E", "Young's modulus.").with_unit("Pa").above(0).required(),
+        number("nu", "Poisson's ratio.").above(-1).below(0.5).required(),
+      }),
+      map_of("orthotropic", "Orthotropic elastic constants in the material axes 1, 2, 3 (axis 3 = z); "
+                            "nu_ij is the contraction along j under stress along i.", {
+        number("E1", "Young's modulus along axis 1.").with_unit("Pa").above(0).required(),
+        number("E2", "Young's modulus along axis 2.").with_unit("Pa").above(0).required(),
+        number("E3", "Young's modulus along axis 3.").with_unit("Pa").above(0).required(),
+        number("G12", "Shear modulus in the 12 plane.").with_unit("Pa").above(0).required(),
+        number("G13", "Shear modulus in the 13 plane.").with_unit("Pa").above(0).required(),
+        number("G23", "Shear modulus in the 23 plane.").with_unit("Pa").above(0).required(),
+        number("nu12", "Poisson's ratio nu12.").required(),
+        number("nu13", "Poisson's ratio nu13.").required(),
+        number("nu23", "Poisson's ratio nu23.").required(),
+      }),
+      number("rho", "Mass density.").with_unit("kg/m^3").above(0).required(),
+      number("angle", "Ply angle: material axis 1 turned about z from x towards y.").with_unit("deg")
+          .defaults_to("0"),
+      map_of("region", "Where the material is: coordinate ranges (box meshes get grid lines at their ends) "
+                       "and/or a physical volume group of a Gmsh mesh; none: everywhere.", {
+        number("x", "Range of the element centroids along x.").with_unit("m").list(2),
+        number("y", "Range of the element centroids along y.").with_unit("m").list(2),
+        number("z", "Range of the element centroids along z (a ply).").with_unit("m").list(2),
+        text("group", "Physical volume group of a Gmsh mesh."),
+      }).optional_section(),
+    }),
+    list_of("boundary", "Prescribed displacements on box faces or mesh groups; none: a free body.", {
+      choice("face", "Face of the box (give face or group).", {faces.begin(), faces.end()}),
+      text("group", "Physical group of a Gmsh mesh (any named node set of the mesh)."),
       choice("fix", "Displacement components fixed on every node of the face.", kAxes).list(1, 3).distinct()
           .required(),
       number("value", "Prescribed displacement of each fixed component.").with_unit("m").list(1, 3)
           .same_length_as("fix").defaults_to("zeros", zeros_per_fix),
     }).defaults_to("[]"),
-    map_of("crack", "An axis-aligned rectangular crack on a grid plane of the mesh; none: no crack.", {
+    map_of("crack", "An axis-aligned rectangular crack on a grid plane of a box mesh (plane and region), or a "
+                    "physical surface group of a Gmsh mesh (group); none: no crack.", {
       map_of("plane", "The plane of the crack.", {
         choice("normal", "Axis normal to the crack.", kAxes).required(),
         number("at", "Position of the plane along the normal; must be a grid plane origin + k size/cells "
                      "strictly inside the body.").with_unit("m").required(),
-      }).required(),
+      }),
       map_of("region", "Rectangle on the plane: [low, high] along each of the two in-plane axes, which "
                        "are exactly its keys.", {
         number("x", "Extent along x.").with_unit("m").list(2),
         number("y", "Extent along y.").with_unit("m").list(2),
         number("z", "Extent along z.").with_unit("m").list(2),
-      }).required(),
+      }).optional_section(),
+      text("group", "Physical surface group of a Gmsh mesh: its nodes are split except on the crack front."),
       number("gap", "Initial normal gap g0 (MODEL.md eq. 9): > 0 open, < 0 pre-compressed.").with_unit("m")
           .defaults_to("0"),
-    }),
+      map_of("contact", "Penalty contact between the crack faces in transient runs (MODEL.md eq. 25d, 15).", {
+        number("penalty", "Normal penalty eps_N (force per unit area per unit penetration); auto: from E and "
+                          "the element size normal to the crack.").with_unit("Pa/m").above(0).or_word("auto")
+            .defaults_to("auto"),
+        number("friction", "Coulomb friction coefficient mu (tangential penalty with a return mapping).")
+            .at_least(0).defaults_to("0"),
+      }),
+    }).optional_section(),
     map_of("modal", "Modal analysis of the linear limits of the cracked body; optional.", {
       integer("modes", "Number of lowest modes per variant.").at_least(1).defaults_to("10"),
       choice("variants", "Linear limits to analyse: faces tied (uncracked) or free (open); open needs a crack.",
@@ -80,6 +132,86 @@ Param build_parameters() {
       choice("solver", "Eigen-solver.", {"slepc", "arpack"}).defaults_to("slepc"),
       choice("mass", "Mass matrix.", {"consistent", "lumped"}).defaults_to("consistent"),
     }),
+    map_of("transient", "Explicit dynamics (MODEL.md eqs. 24-28) run by `crackle run`; optional.", {
+      map_of("excitation", "Force on a face, mesh group or the node nearest a point (give one of them).", {
+        choice("face", "Loaded face of the box (uniform traction of the given total).", {faces.begin(), faces.end()}),
+        text("group", "Loaded node set of a Gmsh mesh."),
+        number("point", "Loaded point: the force acts on the nearest node.").with_unit("m").list(3),
+        choice("direction", "Direction of the force.", kAxes).defaults_to("z"),
+        number("amplitude", "Total force amplitude.").with_unit("N").above(0).required(),
+        choice("kind", "harmonic: sin(2 pi f t) ramped in; pulse: one half-sine of the given duration.",
+               {"harmonic", "pulse"}).defaults_to("harmonic"),
+        map_of("frequency", "Excitation frequency: a value in Hz, or relative to a mode.", {
+          number("hz", "Frequency in Hz.").with_unit("Hz").above(0),
+          integer("mode", "Elastic mode number (1 = lowest) the frequency refers to; needs a modal solve.")
+              .at_least(1),
+          number("ratio", "Multiple of the mode's frequency.").above(0).defaults_to("1"),
+          choice("of", "Which frequency of the mode: bilinear (default with a crack), uncracked (default "
+                       "without) or open.", {"bilinear", "uncracked", "open"})
+              .defaults_to("bilinear with a crack, else uncracked", [](const Values& values, const std::string&) {
+                return std::string(values.has("crack") ? "bilinear" : "uncracked");
+              }),
+        }).or_scalar_for("hz").optional_section(),
+        number("ramp_periods", "Harmonic excitation: periods of the smooth ramp-in.").at_least(0).defaults_to("3"),
+        number("duration", "Pulse: duration of the half-sine.").with_unit("s").above(0),
+      }).optional_section(),
+      map_of("damping", "Rayleigh damping C = alpha M + beta K: a ratio at a frequency, or alpha and beta.", {
+        number("ratio", "Damping ratio xi at the frequency `at`.").at_least(0).below(1),
+        map_of("at", "Frequency of the damping ratio: a value in Hz or a mode.", {
+          number("hz", "Frequency in Hz.").with_unit("Hz").above(0),
+          integer("mode", "Elastic mode number (uncracked variant).").at_least(1),
+        }).or_scalar_for("hz").optional_section(),
+        choice("type", "mass: alpha = 2 xi omega (free per step, no time-step penalty); stiffness: "
+                       "beta = 2 xi / omega (shrinks the stable step).", {"mass", "stiffness"}).defaults_to("mass"),
+        number("alpha", "Mass-proportional coefficient.").with_unit("1/s").at_least(0),
+        number("beta", "Stiffness-proportional coefficient.").with_unit("s").at_least(0),
+      }).optional_section(),
+      number("periods", "Length of the run in excitation periods (the limit when steady-state detection "
+                        "is on).").above(0),
+      number("duration", "Length of the run.").with_unit("s").above(0),
+      number("time_step", "Time step; auto: safety_factor x the critical step (adjusted down so that an "
+                          "excitation period is a whole number of steps).").with_unit("s").above(0)
+          .or_word("auto").defaults_to("auto"),
+      number("safety_factor", "Fraction of the critical time step used by time_step: auto.").above(0).at_most(1)
+          .defaults_to("0.9"),
+      boolean("force_time_step", "Run a time step above the critical one anyway (the health checks stop a "
+                                 "diverging run).").defaults_to("false"),
+      choice("variant", "Run the body with its crack (open faces with contact) or with the faces tied.",
+             {"open", "uncracked"}).defaults_to("open"),
+      list_of("probes", "Points whose displacement, velocity and acceleration are recorded (nearest node).", {
+        text("name", "Name of the probe (column prefix, spectrum.json key).").required(),
+        number("point", "Position.").with_unit("m").list(3).required(),
+        choice("component", "Component analysed by the spectrum (default: the excitation direction).", kAxes),
+      }).defaults_to("[]"),
+      list_of("initial", "Initial velocity and displacement (MODEL.md eq. 6), uniform over the nodes in a "
+                         "coordinate range (all nodes when no range is given).", {
+        number("velocity", "Initial velocity.").with_unit("m/s").list(3).defaults_to("[0, 0, 0]"),
+        number("displacement", "Initial displacement.").with_unit("m").list(3).defaults_to("[0, 0, 0]"),
+        number("x", "Range along x.").with_unit("m").list(2),
+        number("y", "Range along y.").with_unit("m").list(2),
+        number("z", "Range along z.").with_unit("m").list(2),
+      }).defaults_to("[]"),
+      map_of("snapshots", "Displacement fields written as VTU files.", {
+        integer("count", "Number of snapshots spread evenly over the run (0: none).").at_least(0).defaults_to("0"),
+      }),
+      boolean("progress", "Progress line with ETA on the terminal.").defaults_to("true"),
+    }).optional_section(),
+    map_of("spectrum", "Harmonics of the probe responses and damage indices (needs transient).", {
+      integer("harmonics", "Highest harmonic order analysed (orders 1..harmonics of the excitation).")
+          .at_least(1).at_most(50).defaults_to("5"),
+      boolean("subharmonics", "Also orders 1/2, 3/2, 5/2, ...").defaults_to("true"),
+      map_of("steady_state", "Stop when the harmonic table has settled.", {
+        number("tolerance", "Largest change of any harmonic (relative to A1) between the last two windows; "
+                            "0: never stop early.").at_least(0).defaults_to("1e-3"),
+        integer("min_periods", "Periods run before the check starts.").at_least(1).defaults_to("20"),
+        integer("window_periods", "Periods per analysis window (made even for sub-harmonics).").at_least(1)
+            .defaults_to("10"),
+      }),
+      choice("window", "auto: integer-period rectangular window when the sampling allows, else resampled or "
+                       "Hann.", {"auto", "rectangular", "hann", "flattop"}).defaults_to("auto"),
+      boolean("plots", "PNG plots of each probe's history and spectrum (gnuplot; skipped with a note when "
+                       "absent).").defaults_to("true"),
+    }).optional_section(),
   });
   // clang-format on
 }
@@ -93,6 +225,8 @@ bool faces_touch(const std::string& a, const std::string& b) { return a == b || 
 void check_boundary(const Values& values, const std::vector<BoundarySection>& boundary) {
   for (std::size_t j = 0; j < boundary.size(); ++j) {
     for (std::size_t i = 0; i < j; ++i) {
+      // Groups of a mesh file are checked once meshed (fem::make_constraints).
+      if (boundary[i].face.empty() || boundary[j].face.empty()) continue;
       if (!faces_touch(boundary[i].face, boundary[j].face)) continue;
       for (std::size_t k = 0; k < boundary[j].components.size(); ++k) {
         const int component = boundary[j].components[k];
@@ -143,23 +277,249 @@ mesh::CrackSpec crack_from(const Values& values, const mesh::BoxSpec& box) {
   return crack;
 }
 
+/// A mesh file named in a scene, relative to the scene file's folder unless absolute.
+std::string mesh_file_path(const std::string& scene_file, const std::string& mesh_file) {
+  const std::filesystem::path path(mesh_file);
+  if (path.is_absolute()) return mesh_file;
+  return (std::filesystem::path(scene_file).parent_path() / path).string();
+}
+
+std::vector<MaterialEntrySection> materials_from(const Values& values, bool gmsh_mesh) {
+  std::vector<MaterialEntrySection> materials;
+  for (int i = 0; i < values.count("materials"); ++i) {
+    const std::string entry = "materials[" + std::to_string(i) + "]";
+    MaterialEntrySection material;
+    material.name = values.word(entry + ".name");
+    material.density = values.number(entry + ".rho");
+    material.angle = values.number(entry + ".angle");
+    material.line = std::max(values.line(entry), 0);
+    if (values.has(entry + ".isotropic") == values.has(entry + ".orthotropic")) {
+      values.fail(entry, "isotropic or orthotropic constants",
+                  values.has(entry + ".isotropic") ? "both" : "neither");
+    }
+    if (values.has(entry + ".isotropic")) {
+      material.isotropic = MaterialSection{values.number(entry + ".isotropic.E"),
+                                           values.number(entry + ".isotropic.nu"), material.density};
+    } else {
+      const std::string o = entry + ".orthotropic.";
+      material.orthotropic = OrthotropicSection{values.number(o + "E1"),   values.number(o + "E2"),
+                                                values.number(o + "E3"),   values.number(o + "G12"),
+                                                values.number(o + "G13"),  values.number(o + "G23"),
+                                                values.number(o + "nu12"), values.number(o + "nu13"),
+                                                values.number(o + "nu23")};
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::string key = entry + ".region." + kAxes[axis];
+      if (!values.has(key)) continue;
+      const auto& range = values.numbers(key);
+      if (!(range[0] < range[1])) {
+        values.fail(key, "[low, high] with low < high",
+                    "[" + format_number(range[0]) + ", " + format_number(range[1]) + "]");
+      }
+      material.region.range[axis] = std::array<double, 2>{range[0], range[1]};
+    }
+    if (values.has(entry + ".region.group")) {
+      material.region.group = values.word(entry + ".region.group");
+      if (!gmsh_mesh) {
+        values.fail(entry + ".region.group", "coordinate ranges x, y, z (a box mesh has no groups)",
+                    "'" + material.region.group + "'");
+      }
+    }
+    materials.push_back(material);
+  }
+  return materials;
+}
+
+std::optional<double> optional_number(const Values& values, const std::string& path) {
+  if (!values.has(path) || values.is_word(path)) return std::nullopt;
+  return values.number(path);
+}
+
+/// The given keys among `keys` below `parent`, e.g. "face and point".
+std::vector<std::string> given_keys(const Values& values, const std::string& parent,
+                                    const std::vector<std::string>& keys) {
+  std::vector<std::string> given;
+  for (const std::string& key : keys) {
+    if (values.has(parent + "." + key)) given.push_back(key);
+  }
+  return given;
+}
+
+std::string and_list(const std::vector<std::string>& words) {
+  if (words.empty()) return "none";
+  std::string text = words[0];
+  for (std::size_t i = 1; i < words.size(); ++i) text += (i + 1 == words.size() ? " and " : ", ") + words[i];
+  return text;
+}
+
+/// Exactly one of `keys` must be given below `parent`.
+std::string exactly_one(const Values& values, const std::string& parent, const std::vector<std::string>& keys) {
+  const std::vector<std::string> given = given_keys(values, parent, keys);
+  if (given.size() != 1) {
+    std::string expected = "exactly one of ";
+    for (std::size_t i = 0; i < keys.size(); ++i) expected += (i ? ", " : "") + keys[i];
+    values.fail(parent, expected, and_list(given));
+  }
+  return given[0];
+}
+
+TransientSection transient_from(const Values& values, const Scene& scene) {
+  TransientSection transient;
+  if (values.has("transient.excitation")) {
+    ExcitationSection excitation;
+    const std::string where = exactly_one(values, "transient.excitation", {"face", "group", "point"});
+    if (where == "face") excitation.face = values.word("transient.excitation.face");
+    if (where == "group") excitation.group = values.word("transient.excitation.group");
+    if (where == "point") excitation.point = vec3(values.numbers("transient.excitation.point"));
+    excitation.direction = axis_index(values.word("transient.excitation.direction"));
+    excitation.amplitude = values.number("transient.excitation.amplitude");
+    excitation.kind = values.word("transient.excitation.kind");
+    excitation.ramp_periods = values.number("transient.excitation.ramp_periods");
+    if (excitation.kind == "harmonic") {
+      if (!values.has("transient.excitation.frequency")) {
+        values.fail("transient.excitation.frequency", "a frequency (in Hz, or {mode: n, ratio: r}) for a harmonic "
+                    "excitation", "nothing");
+      }
+      const std::string given = exactly_one(values, "transient.excitation.frequency", {"hz", "mode"});
+      if (given == "hz") excitation.frequency_hz = values.number("transient.excitation.frequency.hz");
+      if (given == "mode") excitation.mode = values.integer("transient.excitation.frequency.mode");
+      excitation.ratio = values.number("transient.excitation.frequency.ratio");
+      excitation.of = values.word("transient.excitation.frequency.of");
+      if (excitation.of != "uncracked" && !scene.has_crack()) {
+        values.fail("transient.excitation.frequency.of", "uncracked (the scene has no crack)", excitation.of);
+      }
+    } else {
+      if (!values.has("transient.excitation.duration")) {
+        values.fail("transient.excitation.duration", "the duration of the pulse", "nothing");
+      }
+      excitation.duration = values.number("transient.excitation.duration");
+    }
+    transient.excitation = excitation;
+  }
+  if (values.has("transient.damping")) {
+    DampingSection& damping = transient.damping;
+    const std::vector<std::string> coefficients = given_keys(values, "transient.damping", {"alpha", "beta"});
+    if (values.has("transient.damping.ratio") == !coefficients.empty()) {
+      values.fail("transient.damping", "either ratio (with at) or alpha and/or beta",
+                  values.has("transient.damping.ratio") ? "ratio and " + and_list(coefficients) : "none");
+    }
+    if (values.has("transient.damping.ratio")) {
+      damping.ratio = values.number("transient.damping.ratio");
+      if (!values.has("transient.damping.at")) {
+        values.fail("transient.damping.at", "the frequency of the damping ratio (in Hz or {mode: n})", "nothing");
+      }
+      const std::string given = exactly_one(values, "transient.damping.at", {"hz", "mode"});
+      if (given == "hz") damping.at_hz = values.number("transient.damping.at.hz");
+      if (given == "mode") damping.at_mode = values.integer("transient.damping.at.mode");
+      damping.type = values.word("transient.damping.type");
+    } else {
+      if (values.has("transient.damping.alpha")) damping.alpha = values.number("transient.damping.alpha");
+      if (values.has("transient.damping.beta")) damping.beta = values.number("transient.damping.beta");
+    }
+  }
+  const std::vector<std::string> lengths = given_keys(values, "transient", {"periods", "duration"});
+  if (lengths.size() != 1) values.fail("transient", "exactly one of periods, duration", and_list(lengths));
+  transient.periods = optional_number(values, "transient.periods");
+  transient.duration = optional_number(values, "transient.duration");
+  if (transient.periods && !(transient.excitation && transient.excitation->kind == "harmonic")) {
+    values.fail("transient.periods", "duration (periods needs a harmonic excitation)", "periods");
+  }
+  transient.time_step = optional_number(values, "transient.time_step");
+  transient.safety_factor = values.number("transient.safety_factor");
+  transient.force_time_step = values.flag("transient.force_time_step");
+  transient.variant = values.word("transient.variant");
+  for (int i = 0; i < values.count("transient.probes"); ++i) {
+    const std::string entry = "transient.probes[" + std::to_string(i) + "]";
+    ProbeSection probe;
+    probe.name = values.word(entry + ".name");
+    probe.point = vec3(values.numbers(entry + ".point"));
+    if (values.has(entry + ".component")) probe.component = axis_index(values.word(entry + ".component"));
+    for (const ProbeSection& earlier : transient.probes) {
+      if (earlier.name == probe.name) values.fail(entry + ".name", "a name no other probe has", "'" + probe.name + "' again");
+    }
+    transient.probes.push_back(probe);
+  }
+  for (int i = 0; i < values.count("transient.initial"); ++i) {
+    const std::string entry = "transient.initial[" + std::to_string(i) + "]";
+    InitialSection initial;
+    initial.velocity = vec3(values.numbers(entry + ".velocity"));
+    initial.displacement = vec3(values.numbers(entry + ".displacement"));
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::string key = entry + "." + kAxes[axis];
+      if (!values.has(key)) continue;
+      const auto& range = values.numbers(key);
+      if (!(range[0] < range[1])) {
+        values.fail(key, "[low, high] with low < high", "[" + format_number(range[0]) + ", " + format_number(range[1]) + "]");
+      }
+      initial.range[axis] = std::array<double, 2>{range[0], range[1]};
+    }
+    transient.initial.push_back(initial);
+  }
+  transient.snapshots = values.integer("transient.snapshots.count");
+  transient.progress = values.flag("transient.progress");
+  if (transient.variant == "open" && !scene.has_crack()) transient.variant = "uncracked";
+  return transient;
+}
+
+SpectrumSection spectrum_from(const Values& values, const Scene& scene) {
+  if (!scene.transient || !scene.transient->excitation || scene.transient->excitation->kind != "harmonic") {
+    values.fail("spectrum", "a transient section with a harmonic excitation to analyse", "none");
+  }
+  if (scene.transient->probes.empty()) values.fail("transient.probes", "at least one probe for the spectrum", "none");
+  SpectrumSection spectrum;
+  spectrum.harmonics = values.integer("spectrum.harmonics");
+  spectrum.subharmonics = values.flag("spectrum.subharmonics");
+  spectrum.tolerance = values.number("spectrum.steady_state.tolerance");
+  spectrum.min_periods = values.integer("spectrum.steady_state.min_periods");
+  spectrum.window_periods = values.integer("spectrum.steady_state.window_periods");
+  spectrum.window = values.word("spectrum.window");
+  spectrum.plots = values.flag("spectrum.plots");
+  return spectrum;
+}
+
 Scene scene_from(const Values& values) {
   Scene scene;
   scene.file = values.file();
-  scene.box.origin = vec3(values.numbers("mesh.box.origin"));
-  scene.box.size = vec3(values.numbers("mesh.box.size"));
-  const auto& cells = values.numbers("mesh.box.cells");
-  scene.box.cells = {static_cast<int>(cells[0]), static_cast<int>(cells[1]), static_cast<int>(cells[2])};
-  scene.box.order = values.integer("mesh.box.order");
+  if (values.has("mesh.gmsh")) {
+    scene.gmsh_file = mesh_file_path(values.file(), values.word("mesh.gmsh"));
+  } else {
+    scene.box.origin = vec3(values.numbers("mesh.box.origin"));
+    scene.box.size = vec3(values.numbers("mesh.box.size"));
+    const auto& cells = values.numbers("mesh.box.cells");
+    scene.box.cells = {static_cast<int>(cells[0]), static_cast<int>(cells[1]), static_cast<int>(cells[2])};
+    scene.box.order = values.integer("mesh.box.order");
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::string key = "mesh.box.lines." + kAxes[axis];
+      if (values.has(key)) scene.box.extra_lines[axis] = values.numbers(key);
+    }
+  }
 
-  scene.material.young = values.number("material.E");
-  scene.material.poisson = values.number("material.nu");
-  scene.material.density = values.number("material.rho");
+  const bool has_materials = values.has("materials") && values.count("materials") > 0;
+  if (values.has("material") && has_materials) {
+    values.fail("materials", "either material (one for the whole body) or materials", "both");
+  }
+  if (has_materials) {
+    scene.materials = materials_from(values, !scene.gmsh_file.empty());
+  } else if (!values.has("material")) {
+    values.fail("material", describe(*scene_parameters().child("material")), "nothing");
+  } else {
+    scene.material.young = values.number("material.E");
+    scene.material.poisson = values.number("material.nu");
+    scene.material.density = values.number("material.rho");
+  }
 
   for (int i = 0; i < values.count("boundary"); ++i) {
     const std::string entry = "boundary[" + std::to_string(i) + "]";
     BoundarySection section;
-    section.face = values.word(entry + ".face");
+    if (values.has(entry + ".face") == values.has(entry + ".group")) {
+      values.fail(entry, "face (a box face) or group (a group of the mesh)",
+                  values.has(entry + ".face") ? "both" : "neither");
+    }
+    if (values.has(entry + ".face")) {
+      section.face = values.word(entry + ".face");
+    } else {
+      section.group = values.word(entry + ".group");
+    }
     for (const std::string& axis : values.words(entry + ".fix"))
       section.components.push_back(axis_index(axis));
     section.values = values.numbers(entry + ".value");
@@ -168,7 +528,29 @@ Scene scene_from(const Values& values) {
   }
   check_boundary(values, scene.boundary);
 
-  if (values.has("crack")) scene.crack = crack_from(values, scene.box);
+  if (values.has("crack")) {
+    if (values.has("crack.group")) {
+      if (values.has("crack.plane") || values.has("crack.region")) {
+        values.fail("crack.group", "either group or plane and region", "both");
+      }
+      if (scene.gmsh_file.empty()) {
+        values.fail("crack.group", "plane and region (a box mesh has no groups; group needs mesh.gmsh)",
+                    "'" + values.word("crack.group") + "'");
+      }
+      scene.crack_group = GroupCrackSection{values.word("crack.group"), values.number("crack.gap"),
+                                            std::max(values.line("crack.group"), 0)};
+    } else if (!scene.gmsh_file.empty()) {
+      values.fail("crack", "group (the physical surface of the crack in the Gmsh mesh)", "plane and region");
+    } else {
+      for (const char* key : {"plane", "region"}) {
+        if (!values.has(std::string("crack.") + key)) {
+          values.fail(std::string("crack.") + key, describe(*scene_parameters().child("crack")->child(key)),
+                      "nothing");
+        }
+      }
+      scene.crack = crack_from(values, scene.box);
+    }
+  }
 
   scene.has_modal_section = values.has("modal");
   scene.modal.modes = values.integer("modal.modes");
@@ -176,11 +558,17 @@ Scene scene_from(const Values& values) {
   scene.modal.solver = values.word("modal.solver");
   scene.modal.mass = values.word("modal.mass");
   for (std::size_t i = 0; i < scene.modal.variants.size(); ++i) {
-    if (scene.modal.variants[i] == "open" && !scene.crack) {
+    if (scene.modal.variants[i] == "open" && !scene.has_crack()) {
       values.fail("modal.variants[" + std::to_string(i) + "]", "uncracked (the scene has no crack)",
                   "'open'");
     }
   }
+  if (values.has("crack")) {
+    scene.contact.penalty = optional_number(values, "crack.contact.penalty");
+    scene.contact.friction = values.number("crack.contact.friction");
+  }
+  if (values.has("transient")) scene.transient = transient_from(values, scene);
+  if (values.has("spectrum")) scene.spectrum = spectrum_from(values, scene);
   return scene;
 }
 
@@ -193,6 +581,9 @@ const Param& scene_parameters() {
 
 Scene parse_scene(const std::string& text, const std::string& name, const std::vector<Override>& overrides) {
   YAML::Node document = parse_yaml(text, name);
+  // `study:` belongs to the study driver (src/study), which validates it itself; a single run of a
+  // study's base scene ignores it.
+  if (document.IsMap() && document["study"]) document.remove("study");
   for (const Override& change : overrides) apply_override(document, change.path, change.value, name);
   return scene_from(validate(scene_parameters(), document, name));
 }

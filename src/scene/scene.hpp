@@ -5,10 +5,12 @@
 /// default and doc. The loader validates the YAML against that table, rejects unknown keys, and
 /// reports `file:line: key.path: expected ..., got ...` as an InputError. The same table generates
 /// docs/scene-format.md.
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "core/types.hpp"
 #include "mesh/box.hpp"
 
 namespace crackle::scene {
@@ -19,9 +21,41 @@ struct MaterialSection {
   double density = 0.0;  ///< rho [kg/m^3]
 };
 
-/// One entry of `boundary:`: fix components of every node of a face.
+/// Orthotropic engineering constants of `materials[].orthotropic` (axes 1, 2, 3) [Pa].
+struct OrthotropicSection {
+  double e1 = 0.0, e2 = 0.0, e3 = 0.0, g12 = 0.0, g13 = 0.0, g23 = 0.0;
+  double nu12 = 0.0, nu13 = 0.0, nu23 = 0.0;
+};
+
+/// Where a material of `materials:` is: element centroids inside every given range and, for a Gmsh
+/// mesh, elements of the volume group. Nothing given: everywhere.
+struct RegionSection {
+  std::array<std::optional<std::array<double, 2>>, 3> range;  ///< per axis [m]
+  std::string group;                                           ///< physical volume group, or empty
+};
+
+/// One entry of `materials:` (layered composites).
+struct MaterialEntrySection {
+  std::string name;
+  std::optional<MaterialSection> isotropic;      ///< E, nu (and rho = density)
+  std::optional<OrthotropicSection> orthotropic;
+  double density = 0.0;  ///< rho [kg/m^3]
+  double angle = 0.0;    ///< ply angle about z [deg]
+  RegionSection region;
+  int line = 0;  ///< 1-based line of the entry, for messages
+};
+
+/// `crack: {group: ...}`: a physical surface group of a Gmsh mesh.
+struct GroupCrackSection {
+  std::string group;
+  double gap = 0.0;  ///< initial normal gap g0 [m] (MODEL.md eq. 9)
+  int line = 0;
+};
+
+/// One entry of `boundary:`: fix components of every node of a face or a mesh group.
 struct BoundarySection {
-  std::string face;             ///< x-, x+, y-, y+, z-, z+
+  std::string face;             ///< x-, x+, y-, y+, z-, z+; empty when `group` is given
+  std::string group;            ///< a named node set of the mesh (Gmsh physical group), or empty
   std::vector<int> components;  ///< 0, 1, 2 for x, y, z
   std::vector<double> values;   ///< prescribed displacement [m] per component (default 0)
   int line = 0;                 ///< 1-based line in the scene file, for messages
@@ -35,14 +69,94 @@ struct ModalSection {
   std::string mass = "consistent";    ///< consistent | lumped
 };
 
+/// `crack.contact`: penalty contact options of transient runs.
+struct ContactSection {
+  std::optional<double> penalty;  ///< eps_N [Pa/m]; empty: auto
+  double friction = 0.0;          ///< Coulomb mu
+};
+
+/// `transient.excitation`.
+struct ExcitationSection {
+  std::string face;           ///< box face, or empty
+  std::string group;          ///< mesh group, or empty
+  std::optional<Vec3> point;  ///< nearest node, or empty
+  int direction = 2;          ///< 0, 1, 2 for x, y, z
+  double amplitude = 0.0;     ///< total force [N]
+  std::string kind = "harmonic";     ///< harmonic | pulse
+  std::optional<double> frequency_hz;  ///< given in Hz
+  int mode = 0;                      ///< > 0: frequency = ratio * f(mode) of `of`
+  double ratio = 1.0;
+  std::string of = "uncracked";      ///< bilinear | uncracked | open
+  double ramp_periods = 3.0;
+  double duration = 0.0;             ///< pulse [s]
+};
+
+/// `transient.damping`: either a ratio at a frequency (or mode) or alpha/beta directly.
+struct DampingSection {
+  std::optional<double> ratio;
+  std::optional<double> at_hz;
+  int at_mode = 0;
+  std::string type = "mass";  ///< mass | stiffness
+  double alpha = 0.0, beta = 0.0;
+};
+
+struct ProbeSection {
+  std::string name;
+  Vec3 point = Vec3::Zero();
+  int component = -1;  ///< -1: the excitation direction
+};
+
+/// One entry of `transient.initial`.
+struct InitialSection {
+  Vec3 velocity = Vec3::Zero();
+  Vec3 displacement = Vec3::Zero();
+  std::array<std::optional<std::array<double, 2>>, 3> range;  ///< per axis [m]; none: everywhere
+};
+
+/// `transient:` (issue 4).
+struct TransientSection {
+  std::optional<ExcitationSection> excitation;
+  DampingSection damping;
+  std::optional<double> periods;   ///< run length in excitation periods
+  std::optional<double> duration;  ///< run length [s]
+  std::optional<double> time_step;  ///< [s]; empty: auto
+  double safety_factor = 0.9;
+  bool force_time_step = false;
+  std::string variant = "open";
+  std::vector<ProbeSection> probes;
+  std::vector<InitialSection> initial;
+  int snapshots = 0;
+  bool progress = true;
+};
+
+/// `spectrum:` (issue 5).
+struct SpectrumSection {
+  int harmonics = 5;
+  bool subharmonics = true;
+  double tolerance = 1e-3;
+  int min_periods = 20;
+  int window_periods = 10;
+  std::string window = "auto";
+  bool plots = true;
+};
+
 struct Scene {
   std::string file;  ///< path the scene was read from (or a name for in-memory scenes)
   mesh::BoxSpec box;
+  /// `mesh.gmsh` resolved against the scene file's folder; empty for a box mesh.
+  std::string gmsh_file;
   MaterialSection material;
+  /// `materials:` (regions with their own, possibly orthotropic, materials); empty: `material`.
+  std::vector<MaterialEntrySection> materials;
   std::vector<BoundarySection> boundary;
   std::optional<mesh::CrackSpec> crack;
+  std::optional<GroupCrackSection> crack_group;  ///< `crack: {group: ...}` of a Gmsh mesh
+  bool has_crack() const { return crack || crack_group; }
+  ContactSection contact;
   ModalSection modal;
   bool has_modal_section = false;
+  std::optional<TransientSection> transient;
+  std::optional<SpectrumSection> spectrum;
 };
 
 struct Param;

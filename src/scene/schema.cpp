@@ -66,6 +66,21 @@ Param& Param::defaults_to(std::string description, DefaultRule rule) {
   return *this;
 }
 
+Param& Param::optional_section() {
+  is_optional_section = true;
+  return *this;
+}
+
+Param& Param::or_word(std::string word) {
+  word_alternative = std::move(word);
+  return *this;
+}
+
+Param& Param::or_scalar_for(std::string child) {
+  scalar_child = std::move(child);
+  return *this;
+}
+
 const Param* Param::child(const std::string& child_name) const {
   for (const Param& c : children)
     if (c.name == child_name) return &c;
@@ -113,6 +128,7 @@ Param choice(std::string name, std::string doc, std::vector<std::string> choices
 Param boolean(std::string name, std::string doc) {
   return make(std::move(name), Kind::boolean, std::move(doc));
 }
+Param text(std::string name, std::string doc) { return make(std::move(name), Kind::text, std::move(doc)); }
 
 // ---- phrases for messages and docs
 
@@ -177,6 +193,8 @@ std::string scalar_phrase(const Param& p, bool plural) {
       return (plural ? "entries from " : "one of ") + join(p.choices);
     case Kind::boolean:
       return plural ? "booleans" : "true or false";
+    case Kind::text:
+      return plural ? "texts" : "a text";
     default:
       break;
   }
@@ -191,7 +209,9 @@ std::string scalar_phrase(const Param& p, bool plural) {
       phrase += " " + range;
   }
   if (plural) return phrase;
-  return (std::string("aeiou").find(phrase[0]) != std::string::npos ? "an " : "a ") + phrase;
+  phrase = (std::string("aeiou").find(phrase[0]) != std::string::npos ? "an " : "a ") + phrase;
+  if (!p.word_alternative.empty()) phrase += " or " + p.word_alternative;
+  return phrase;
 }
 
 std::string count_text(const Param& p) {
@@ -309,7 +329,13 @@ class Validator {
     }
     switch (param.kind) {
       case Kind::map:
-        visit_map(param, node, path, line, defaulted);
+        if (!param.scalar_child.empty() && node.IsScalar()) {
+          YAML::Node expanded(YAML::NodeType::Map);
+          expanded[param.scalar_child] = node;
+          visit_map(param, expanded, path, line, defaulted);
+        } else {
+          visit_map(param, node, path, line, defaulted);
+        }
         break;
       case Kind::list:
         visit_list(param, node, path, line, defaulted);
@@ -332,7 +358,8 @@ class Validator {
       visit(param, YAML::Load(param.default_text), path, parent_line, true);
     } else if (param.is_required) {
       fail(path, parent_line, describe(param), "nothing");
-    } else if (param.kind == Kind::map && !param.is_one_of && !has_required_child(param)) {
+    } else if (param.kind == Kind::map && !param.is_one_of && !param.is_optional_section &&
+               !has_required_child(param)) {
       // An absent optional section without required keys still provides its defaults.
       visit_children(param, YAML::Node(YAML::NodeType::Map), path, parent_line, true);
     }
@@ -423,7 +450,7 @@ class Validator {
       read_scalar(param, item, item_path, item_line, single);
       if (param.is_distinct) {
         const bool repeated =
-            param.kind == Kind::choice
+            param.kind == Kind::choice || param.kind == Kind::text
                 ? std::count(value.words.begin(), value.words.end(), single.words[0]) > 0
                 : std::count(value.numbers.begin(), value.numbers.end(), single.numbers[0]) > 0;
         if (repeated) fail(item_path, item_line, "each entry at most once", describe_node(item) + " again");
@@ -448,6 +475,10 @@ class Validator {
     double number = 0;
     switch (param.kind) {
       case Kind::number:
+        if (!param.word_alternative.empty() && text == param.word_alternative && !is_quoted(node)) {
+          value.words.push_back(text);
+          break;
+        }
         if (is_quoted(node) || !parse_number(text, number)) fail(path, line, expected, describe_node(node));
         check_range(param, number, path, line, format_number(number));
         value.numbers.push_back(number);
@@ -464,6 +495,10 @@ class Validator {
         value.numbers.push_back(static_cast<double>(whole));
         break;
       }
+      case Kind::text:
+        if (text.empty()) fail(path, line, expected, "an empty text");
+        value.words.push_back(text);
+        break;
       case Kind::boolean:
         if (is_quoted(node) || (text != "true" && text != "false" && text != "True" && text != "False" &&
                                 text != "TRUE" && text != "FALSE")) {
@@ -651,6 +686,7 @@ std::string markdown_table(const Param& root) {
       switch (p.kind) {
         case Kind::map:
           type = p.is_one_of ? "one of" : "map";
+          if (!p.scalar_child.empty()) type += " (or a value for its `" + p.scalar_child + "`)";
           break;
         case Kind::list:
           type = "list of maps";
@@ -659,11 +695,14 @@ std::string markdown_table(const Param& root) {
           static const std::map<Kind, std::string> nouns = {{Kind::number, "number"},
                                                             {Kind::integer, "integer"},
                                                             {Kind::choice, "choice"},
-                                                            {Kind::boolean, "bool"}};
+                                                            {Kind::boolean, "bool"},
+                                                            {Kind::text, "text"}};
           type = nouns.at(p.kind);
           range = p.kind == Kind::choice    ? join(p.choices)
                   : p.kind == Kind::boolean ? "true, false"
+                  : p.kind == Kind::text    ? ""
                                             : range_text(p);
+          if (!p.word_alternative.empty()) range += (range.empty() ? "" : "; ") + std::string("or `") + p.word_alternative + "`";
           if (p.is_list_of_scalars()) {
             type = "list of " + (p.length_of.empty() ? count_text(p) + " " : "") +
                    (p.is_distinct ? "distinct " : "") + type + "s" +

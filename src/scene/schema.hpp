@@ -25,6 +25,7 @@ enum class Kind {
   integer,  ///< an integer
   choice,   ///< one of a fixed set of words
   boolean,  ///< true or false
+  text,     ///< any word or quoted string (a file name, a group name)
 };
 
 /// Computes a default (YAML text) from the values validated so far; `parent` is the path of the
@@ -40,6 +41,7 @@ struct Param {
   std::string unit;
   bool is_required = false;
   bool is_one_of = false;  ///< map: exactly one of the children must be present
+  bool is_optional_section = false;  ///< map: absent unless given (no defaults filled in when absent)
   double min = -std::numeric_limits<double>::infinity();
   double max = std::numeric_limits<double>::infinity();
   bool min_open = false, max_open = false;
@@ -50,6 +52,8 @@ struct Param {
   std::string default_text;            ///< YAML text of the default; a description with a rule
   DefaultRule default_rule;            ///< computes the default when set
   std::vector<Param> children;         ///< keys of a map, keys of each entry of a list
+  std::string word_alternative;        ///< number: a word also accepted instead, e.g. "auto"
+  std::string scalar_child;            ///< map: a scalar given for the map stands for this child
 
   Param& required();
   Param& with_unit(std::string unit_text);
@@ -63,6 +67,13 @@ struct Param {
   Param& same_length_as(std::string sibling);
   Param& defaults_to(std::string yaml);
   Param& defaults_to(std::string description, DefaultRule rule);
+  /// A map that stays absent when not given, even without required keys (has() is false then).
+  Param& optional_section();
+  /// A number that may also be given as this word (read with Values::is_word).
+  Param& or_word(std::string word);
+  /// A map that may also be given as a plain value, meaning `{child: value}`
+  /// (`frequency: 850` for `frequency: {hz: 850}`).
+  Param& or_scalar_for(std::string child);
 
   bool is_list_of_scalars() const { return max_length > 0; }
   /// The child with this name, or nullptr.
@@ -78,12 +89,14 @@ Param number(std::string name, std::string doc);
 Param integer(std::string name, std::string doc);
 Param choice(std::string name, std::string doc, std::vector<std::string> choices);
 Param boolean(std::string name, std::string doc);
+/// A free text value: a file name or a mesh group name.
+Param text(std::string name, std::string doc);
 
 /// One validated value. Scalars are lists of one entry.
 struct Value {
   Kind kind = Kind::map;
   std::vector<double> numbers;     ///< number, integer, boolean (0 or 1)
-  std::vector<std::string> words;  ///< choice
+  std::vector<std::string> words;  ///< choice, text
   int count = 0;                   ///< entries of a list of maps
   int line = -1;                   ///< 1-based line in the file (of the parent when defaulted); -1 unknown
 };
@@ -100,6 +113,8 @@ class Values {
   double number(const std::string& path) const { return entries_.at(path).numbers.at(0); }
   int integer(const std::string& path) const { return static_cast<int>(number(path)); }
   bool flag(const std::string& path) const { return number(path) != 0.0; }
+  /// True when a number declared with or_word() was given as that word.
+  bool is_word(const std::string& path) const { return has(path) && !entries_.at(path).words.empty(); }
   const std::string& word(const std::string& path) const { return entries_.at(path).words.at(0); }
   const std::vector<double>& numbers(const std::string& path) const { return entries_.at(path).numbers; }
   const std::vector<std::string>& words(const std::string& path) const { return entries_.at(path).words; }

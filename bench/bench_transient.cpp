@@ -1,0 +1,121 @@
+/// Benchmark of the transient solver: nanoseconds per DOF and time step (internal forces,
+/// central-difference update, loads, contact, health checks) on box meshes of order p = 1..4,
+/// for 1 and 2 threads, with and without a crack in contact, and the share of the time spent in
+/// the contact forces. Usage:
+///   bench_transient [--orders 1,2,3,4] [--elements 1e4,1e5,1e6] [--threads 1,2] [--seconds 2]
+///                   [--max-dofs 3e7] [--crack]
+/// One line per case on stdout (a table), progress on stderr.
+#include <omp.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/resources.hpp"
+#include "fem/material.hpp"
+#include "mesh/box.hpp"
+#include "transient/solver.hpp"
+
+namespace {
+
+std::vector<double> parse_list(const std::string& text) {
+  std::vector<double> values;
+  std::stringstream stream(text);
+  std::string item;
+  while (std::getline(stream, item, ',')) values.push_back(std::stod(item));
+  return values;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace crackle;
+  std::vector<double> orders = {1, 2, 3, 4}, elements = {1e4, 1e5, 1e6}, threads = {1, 2};
+  double seconds = 2.0, max_dofs = 3e7;
+  bool crack = false;
+  for (int k = 1; k < argc; ++k) {
+    const std::string flag = argv[k];
+    const std::string value = k + 1 < argc ? argv[k + 1] : "";
+    if (flag == "--orders") orders = parse_list(value), ++k;
+    else if (flag == "--elements") elements = parse_list(value), ++k;
+    else if (flag == "--threads") threads = parse_list(value), ++k;
+    else if (flag == "--seconds") seconds = std::stod(value), ++k;
+    else if (flag == "--max-dofs") max_dofs = std::stod(value), ++k;
+    else if (flag == "--crack") crack = true;
+    else {
+      std::fprintf(stderr, "usage: %s [--orders 1,2] [--elements 1e4,1e5] [--threads 1,2] [--seconds s] "
+                           "[--max-dofs n] [--crack]\n", argv[0]);
+      return 2;
+    }
+  }
+  std::printf("%-3s %-9s %-10s %-7s %-14s %-8s %-12s %-12s %-10s %-9s\n", "p", "elements", "dofs", "threads", "kernel",
+              "steps", "ns/dof-step", "setup [s]", "contact %", "pairs");
+  for (double order_value : orders) {
+    const int order = static_cast<int>(order_value);
+    for (double target : elements) {
+      const int n = std::max(2, static_cast<int>(std::lround(std::cbrt(target))));
+      const double dofs_estimate = 3.0 * std::pow(n * order + 1.0, 3);
+      if (dofs_estimate > max_dofs) {
+        std::fprintf(stderr, "skip p = %d, %d^3 elements: about %.3g DOFs > --max-dofs\n", order, n, dofs_estimate);
+        continue;
+      }
+      mesh::BoxSpec box;
+      box.size = Vec3(1.0, 1.0, 1.0);
+      box.cells = {n, n, n};
+      box.order = order;
+      std::optional<mesh::CrackSpec> spec;
+      if (crack) {  // a quarter of the mid plane, from the surface y = 0
+        mesh::CrackSpec c;
+        c.normal = kZ;
+        c.at = std::round(0.5 * n) / n;
+        c.region = {{{0.25, 0.75}, {0.0, 0.5}, {0.0, 0.0}}};
+        c.region[0] = {std::round(0.25 * n) / n, std::round(0.75 * n) / n};
+        c.region[1] = {0.0, std::round(0.5 * n) / n};
+        spec = c;
+      }
+      const Stopwatch mesh_watch;
+      const mesh::Mesh mesh = mesh::build_box_mesh(box, spec);
+      const double mesh_seconds = mesh_watch.seconds();
+      transient::TransientProblem problem;
+      problem.materials = {fem::isotropic(2e11, 0.3, 7800.0)};
+      problem.dirichlet.push_back({mesh.node_sets.at("z-"), {0, 1, 2}, {0.0, 0.0, 0.0}, "clamp"});
+      if (crack) problem.contact = contact::ContactOptions{};
+      transient::ExternalLoad load;
+      load.faces = mesh.face_sets.at("z+");
+      load.direction = Vec3(0.3, 0.0, 1.0);
+      load.amplitude = 1e6;
+      load.signal.frequency = 200.0;
+      load.signal.ramp_periods = 0.5;
+      problem.loads.push_back(load);
+      for (double thread_value : threads) {
+        const int thread_count = static_cast<int>(thread_value);
+        omp_set_num_threads(thread_count);
+        transient::TransientOptions options;
+        options.progress = false;
+        options.end_time = 1.0;  // replaced once the step is known
+        // Calibrate: a short run, then one of about `seconds`.
+        options.end_time = 1e-12;
+        transient::TransientSolver probe(mesh, problem, options);
+        const double dt = probe.dt();
+        options.end_time = 20 * dt;
+        transient::TransientSolver warm(mesh, problem, options);
+        warm.run();
+        const double per_step = warm.summary().wall_s / warm.summary().steps;
+        const double steps = std::max(20.0, std::min(1e7, seconds / std::max(per_step, 1e-9)));
+        options.end_time = steps * dt;
+        transient::TransientSolver solver(mesh, problem, options);
+        const transient::TransientSummary& summary = solver.run();
+        std::printf("%-3d %-9lld %-10lld %-7d %-14s %-8lld %-12.2f %-12.2f %-10.2f %-9lld\n", order,
+                    static_cast<long long>(mesh.n_elements()), static_cast<long long>(summary.n_dofs), thread_count,
+                    summary.kernel.c_str(), static_cast<long long>(summary.steps), summary.ns_per_dof_step,
+                    summary.setup_s + mesh_seconds, 100.0 * summary.contact_time_fraction,
+                    static_cast<long long>(solver.contact() ? solver.contact()->n_pairs() : 0));
+        std::fflush(stdout);
+      }
+    }
+  }
+  return 0;
+}

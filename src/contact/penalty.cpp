@@ -1,0 +1,67 @@
+#include "contact/penalty.hpp"
+
+#include <cmath>
+
+namespace crackle::contact {
+
+CoulombUpdate coulomb_return_mapping(const Vec3& traction_old, const Vec3& relative_increment,
+                                     const Vec3& normal, double tangential_penalty,
+                                     double friction_coefficient, double pressure) {
+  // Elastic predictor on the tangent plane, then radial return onto the cone |t| = mu p (eq. 15).
+  const Vec3 old = tangential_part(traction_old, normal);
+  const Vec3 slip_increment = tangential_part(relative_increment, normal);
+  const Vec3 trial = old - tangential_penalty * slip_increment;
+  const double limit = friction_coefficient * std::max(pressure, 0.0);
+  CoulombUpdate update;
+  const double trial_norm = trial.norm();
+  if (trial_norm <= limit) {
+    update.traction = trial;
+  } else {
+    update.slipping = true;
+    update.traction = trial_norm > 0.0 ? Vec3(trial * (limit / trial_norm)) : Vec3::Zero();
+  }
+  // Absorbed work by the midpoint rule less the change of the stored energy |t|^2 / (2 eps_T).
+  // In stick t_new = t_old - eps_T ds, and the two cancel exactly.
+  if (update.slipping) {
+    const double absorbed = -0.5 * (old + update.traction).dot(slip_increment);
+    const double stored_change = tangential_penalty > 0.0
+                                     ? 0.5 * (update.traction.squaredNorm() - old.squaredNorm()) / tangential_penalty
+                                     : 0.0;
+    update.dissipation = absorbed - stored_change;
+  }
+  return update;
+}
+
+PairResponse implicit_pair_response(double free_gap, const Vec3& free_increment, const Vec3& normal,
+                                    const Vec3& traction_old, double compliance, double tangential_compliance,
+                                    double normal_penalty, double tangential_penalty, double friction_coefficient) {
+  PairResponse response;
+  response.gap = free_gap;
+  if (free_gap < 0.0) {
+    response.gap = free_gap / (1.0 + normal_penalty * compliance);
+    response.pressure = -normal_penalty * response.gap;
+  }
+  if (!(friction_coefficient > 0.0)) return response;
+  const Vec3 old = tangential_part(traction_old, normal);
+  const Vec3 free_slip = tangential_part(free_increment, normal);
+  const Vec3 trial = (old - tangential_penalty * free_slip) / (1.0 + tangential_penalty * tangential_compliance);
+  const double limit = friction_coefficient * response.pressure;
+  const double trial_norm = trial.norm();
+  if (trial_norm <= limit) {
+    response.traction = trial;
+  } else {
+    response.slipping = true;
+    response.traction = trial_norm > 0.0 ? Vec3(trial * (limit / trial_norm)) : Vec3::Zero();
+    // Midpoint-rule absorbed work less the change of stored energy (zero in stick, as in
+    // coulomb_return_mapping), with the slip the traction actually produces.
+    const Vec3 slip = free_slip + tangential_compliance * response.traction;
+    const double absorbed = -0.5 * (old + response.traction).dot(slip);
+    const double stored_change = tangential_penalty > 0.0
+                                     ? 0.5 * (response.traction.squaredNorm() - old.squaredNorm()) / tangential_penalty
+                                     : 0.0;
+    response.dissipation = absorbed - stored_change;
+  }
+  return response;
+}
+
+}  // namespace crackle::contact

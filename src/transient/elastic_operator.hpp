@@ -1,0 +1,79 @@
+#pragma once
+/// \file Matrix-free internal forces f_int = K u, MODEL.md eq. (25a), element by element without
+/// assembling K (an operator is an action, STYLE.md: interchangeable with an assembled matrix).
+///
+/// Two kernels, chosen at construction:
+/// - **brick**: for meshes of axis-aligned bricks (mesh.axis_aligned_bricks), the element matrix
+///   depends only on (hx, hy, hz, region); it is computed once per distinct brick (sizes equal to
+///   1e-10 relative) with fem::element_stiffness. If the material is invariant under the three
+///   reflections of the brick (isotropic, or orthotropic along the axes), the element matrix is
+///   stored block-diagonalised by those symmetries: sums and differences of mirror nodes (a
+///   butterfly per direction) split it into 8 dense blocks with 1/8 of the entries in total.
+///   Otherwise the whole K_e is kept. Elements are processed in SIMD batches of 8 of the same
+///   brick: gather, butterfly, small dense products, butterfly, scatter. At order 1, a batch of 8
+///   elements consecutive along x whose nodes are consecutive too (the box generator's numbering)
+///   is gathered and scattered with vector loads and shuffles. The hot loop is built for AVX-512,
+///   AVX2+FMA and the baseline, picked at run time.
+/// - **general**: any hexahedra: sum factorisation on the (p+1)^3 Gauss points (the quadrature of
+///   fem::element_stiffness), with the inverse Jacobian and w det J of every Gauss point stored
+///   (10 doubles per point); checks that every Jacobian is positive.
+///
+/// Threads (OpenMP, omp_get_max_threads() at the call): the elements are cut into chunks of
+/// consecutive elements, and the chunks coloured so that no two chunks of a colour share a DOF
+/// node; one colour at a time, threads take whole chunks. With one thread the chunks run in
+/// element order; below 20000 DOFs an application always runs on one thread. Results are
+/// independent of the thread count up to summation order.
+#include <memory>
+#include <string>
+
+#include "core/types.hpp"
+#include "fem/assembly.hpp"
+#include "mesh/mesh.hpp"
+
+namespace crackle::transient {
+
+struct ElasticOperatorOptions {
+  /// Use the brick kernel when the mesh allows it (false forces the general kernel, for tests).
+  bool brick_kernel = true;
+  /// Elements per chunk (the unit of work of a thread); 0 = automatic.
+  Index chunk_elements = 0;
+};
+
+/// What the operator chose, for logs and benchmarks.
+struct ElasticOperatorInfo {
+  std::string kernel;        ///< "brick-blocked", "brick-dense" or "general"
+  std::string instruction_set = "baseline";  ///< build of the brick kernel in use: "avx512", "avx2", "baseline"
+  Index n_elements = 0;
+  Index n_dofs = 0;
+  int n_element_matrices = 0;  ///< distinct bricks (brick kernel)
+  Index n_chunks = 0;
+  int n_colours = 0;           ///< colour classes of chunks
+  Index n_batches = 0;          ///< SIMD batches of the brick kernel
+  Index n_lattice_batches = 0;  ///< of which gathered and scattered with vector moves (order 1)
+  /// Multiply-adds per element application in the brick kernel (block entries, or (3n)^2 dense).
+  long long element_multiply_adds = 0;
+};
+
+/// y = K x over the DOFs of a DOF map (constraints not applied: every DOF, fixed ones included).
+class ElasticOperator {
+ public:
+  ElasticOperator(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const fem::Materials& materials,
+                  const ElasticOperatorOptions& options = {});
+  ~ElasticOperator();
+  ElasticOperator(ElasticOperator&&) noexcept;
+  ElasticOperator& operator=(ElasticOperator&&) noexcept;
+
+  Index n_dofs() const;
+  const ElasticOperatorInfo& info() const;
+
+  /// y += scale K x (x and y of size n_dofs(); y is not cleared).
+  void apply_add(double scale, const VectorX& x, VectorX& y) const;
+  /// y = K x.
+  void apply(const VectorX& x, VectorX& y) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace crackle::transient

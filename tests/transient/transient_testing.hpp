@@ -1,0 +1,113 @@
+#pragma once
+/// \file Helpers of the transient tests: dense modal reference solutions, frequency estimation.
+#include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
+#include <cmath>
+#include <complex>
+#include <vector>
+
+#include "fem/assembly.hpp"
+#include "fem/constraints.hpp"
+#include "mesh/mesh.hpp"
+
+namespace crackle::transient::testing {
+
+/// Lowest modes of K phi = omega^2 M phi, M the lumped mass, over the free DOFs (dense solve:
+/// small meshes only). Modes are returned over all DOFs (zero at held ones), M-normalised.
+struct DenseModes {
+  VectorX omega;   ///< ascending [rad/s]
+  MatrixX shapes;  ///< columns
+};
+
+inline DenseModes dense_modes(const SparseMatrix& stiffness, const VectorX& lumped_mass, const fem::Constraints& constraints,
+                              int count) {
+  const Index n_free = constraints.n_free();
+  MatrixX a(n_free, n_free);
+  const SparseMatrix free = fem::restrict_to_free(stiffness, constraints);
+  a = MatrixX(free);
+  VectorX scale(n_free);
+  for (Index i = 0; i < n_free; ++i) scale[i] = 1.0 / std::sqrt(lumped_mass[constraints.free_dofs[i]]);
+  a = scale.asDiagonal() * a * scale.asDiagonal();
+  Eigen::SelfAdjointEigenSolver<MatrixX> solver(a);
+  DenseModes modes;
+  const int m = std::min<int>(count, n_free);
+  modes.omega.resize(m);
+  modes.shapes = MatrixX::Zero(stiffness.rows(), m);
+  for (int k = 0; k < m; ++k) {
+    modes.omega[k] = std::sqrt(std::max(0.0, solver.eigenvalues()[k]));
+    for (Index i = 0; i < n_free; ++i) modes.shapes(constraints.free_dofs[i], k) = scale[i] * solver.eigenvectors()(i, k);
+  }
+  return modes;
+}
+
+/// Largest omega of the same problem.
+inline double dense_omega_max(const SparseMatrix& stiffness, const VectorX& lumped_mass, const fem::Constraints& constraints) {
+  const Index n_free = constraints.n_free();
+  MatrixX a = MatrixX(fem::restrict_to_free(stiffness, constraints));
+  VectorX scale(n_free);
+  for (Index i = 0; i < n_free; ++i) scale[i] = 1.0 / std::sqrt(lumped_mass[constraints.free_dofs[i]]);
+  a = scale.asDiagonal() * a * scale.asDiagonal();
+  Eigen::SelfAdjointEigenSolver<MatrixX> solver(a, Eigen::EigenvaluesOnly);
+  return std::sqrt(solver.eigenvalues().maxCoeff());
+}
+
+/// |DFT| of a Hann-windowed signal (mean removed) at frequency f [Hz].
+inline double windowed_dft(const std::vector<double>& signal, double dt, double frequency) {
+  const std::size_t n = signal.size();
+  double mean = 0.0;
+  for (double s : signal) mean += s;
+  mean /= static_cast<double>(n);
+  std::complex<double> sum = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double window = 0.5 - 0.5 * std::cos(2.0 * M_PI * static_cast<double>(k) / static_cast<double>(n - 1));
+    sum += window * (signal[k] - mean) * std::polar(1.0, -2.0 * M_PI * frequency * dt * static_cast<double>(k));
+  }
+  return std::abs(sum);
+}
+
+/// Frequency of the DFT peak in [low, high] [Hz]: scan on the resolution grid 1/T, then refine
+/// the peak by golden-section search of the continuous (windowed) DFT.
+inline double dominant_frequency(const std::vector<double>& signal, double dt, double low, double high) {
+  const double duration = dt * static_cast<double>(signal.size());
+  const double resolution = 1.0 / duration;
+  double best = low, best_value = -1.0;
+  for (double f = low; f <= high; f += 0.25 * resolution) {
+    const double value = windowed_dft(signal, dt, f);
+    if (value > best_value) {
+      best_value = value;
+      best = f;
+    }
+  }
+  double a = best - 0.25 * resolution, b = best + 0.25 * resolution;
+  const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
+  for (int iteration = 0; iteration < 60; ++iteration) {
+    const double c = b - golden * (b - a), d = a + golden * (b - a);
+    if (windowed_dft(signal, dt, c) > windowed_dft(signal, dt, d)) {
+      b = d;
+    } else {
+      a = c;
+    }
+  }
+  return 0.5 * (a + b);
+}
+
+/// Frequency from upward zero crossings of (signal - mean), linearly interpolated [Hz].
+inline double zero_crossing_frequency(const std::vector<double>& signal, double dt) {
+  double mean = 0.0;
+  for (double s : signal) mean += s;
+  mean /= static_cast<double>(signal.size());
+  double first = -1.0, last = -1.0;
+  int crossings = 0;
+  for (std::size_t k = 1; k < signal.size(); ++k) {
+    const double a = signal[k - 1] - mean, b = signal[k] - mean;
+    if (a < 0.0 && b >= 0.0) {
+      const double t = dt * (static_cast<double>(k - 1) + a / (a - b));
+      if (first < 0.0) first = t;
+      last = t;
+      ++crossings;
+    }
+  }
+  return crossings > 1 ? (crossings - 1) / (last - first) : 0.0;
+}
+
+}  // namespace crackle::transient::testing
