@@ -195,6 +195,8 @@ void run_run_command(const RunCommandOptions& options, std::ostream& out) {
     contact.initial_gap = scene.crack ? scene.crack->gap : (scene.crack_group ? scene.crack_group->gap : 0.0);
     contact.normal_penalty = scene.contact.penalty.value_or(0.0);
     contact.friction_coefficient = scene.contact.friction;
+    contact.integration = scene.contact.integration == "explicit" ? contact::ContactIntegration::explicit_forces
+                                                                  : contact::ContactIntegration::implicit;
     problem.contact = contact;
   }
   const mesh::DofMap run_dofs = mesh::make_dof_map(model.mesh, settings.variant);

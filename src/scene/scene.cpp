@@ -122,6 +122,10 @@ Param build_parameters() {
             .defaults_to("auto"),
         number("friction", "Coulomb friction coefficient mu (tangential penalty with a return mapping).")
             .at_least(0).defaults_to("0"),
+        choice("integration", "implicit: the penalty law at U(i+1), solved per pair in closed form, so the "
+                              "springs do not limit the time step (auto penalty 1000 E/h); explicit: the "
+                              "force at U(i) as in MODEL.md eq. 27, the springs enter omega_max (auto penalty "
+                              "E/h).", {"implicit", "explicit"}).defaults_to("implicit"),
       }),
     }).optional_section(),
     map_of("modal", "Modal analysis of the linear limits of the cracked body; optional.", {
@@ -566,6 +570,7 @@ Scene scene_from(const Values& values) {
   if (values.has("crack")) {
     scene.contact.penalty = optional_number(values, "crack.contact.penalty");
     scene.contact.friction = values.number("crack.contact.friction");
+    scene.contact.integration = values.word("crack.contact.integration");
   }
   if (values.has("transient")) scene.transient = transient_from(values, scene);
   if (values.has("spectrum")) scene.spectrum = spectrum_from(values, scene);

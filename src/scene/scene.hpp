@@ -73,6 +73,7 @@ struct ModalSection {
 struct ContactSection {
   std::optional<double> penalty;  ///< eps_N [Pa/m]; empty: auto
   double friction = 0.0;          ///< Coulomb mu
+  std::string integration = "implicit";  ///< implicit | explicit
 };
 
 /// `transient.excitation`.
