@@ -11,7 +11,7 @@
 #include <string>
 
 #include "core/errors.hpp"
-#include "fem/element.hpp"
+#include "fem/element_basis.hpp"
 
 namespace crackle::fem {
 namespace {
@@ -243,12 +243,12 @@ BrickKey brick_key(const mesh::Mesh& mesh, Index e, std::array<double, 3>& size)
 }
 
 /// Element matrix of `kind` (stiffness 3n x 3n, or rho times the scalar n x n mass).
-void element_matrix(Kind kind, const HexBasis& basis, const double* coords, const Material& material,
+void element_matrix(Kind kind, const ElementBasis& basis, const double* coords, const Material& material,
                     MatrixX& matrix) {
   if (kind == Kind::stiffness) {
-    element_stiffness(basis, coords, material, matrix);
+    basis.stiffness(coords, material, matrix);
   } else {
-    element_mass_scalar(basis, coords, matrix);
+    basis.mass_scalar(coords, matrix);
     matrix *= material.density;
   }
 }
@@ -257,8 +257,8 @@ SparseMatrix assemble(Kind kind, const mesh::Mesh& mesh, const mesh::DofMap& dof
                       const AssemblyOptions& options, AssemblyReport* report) {
   const double t0 = omp_get_wtime();
   check_inputs(mesh, dofs, &materials);
-  const HexBasis basis(mesh.order);
-  const int npe = basis.n_nodes;
+  const ElementBasis basis(mesh);
+  const int npe = basis.n_nodes();
   const NodeGraph graph = build_graph(mesh, dofs, true);
   const std::vector<std::vector<Index>> classes = colour(graph);
   SparseMatrix matrix = make_pattern(graph, kind == Kind::stiffness);
@@ -267,7 +267,8 @@ SparseMatrix assemble(Kind kind, const mesh::Mesh& mesh, const mesh::DofMap& dof
   // Brick cache: one element matrix per distinct (hx, hy, hz, region), on a canonical brick.
   std::vector<int> matrix_id;
   std::vector<MatrixX> cached;
-  if (options.brick_cache && mesh.axis_aligned_bricks && graph.n_elements > 0) {
+  if (options.brick_cache && mesh.axis_aligned_bricks && mesh.shape == mesh::ElementShape::hexahedron &&
+      graph.n_elements > 0) {
     std::map<BrickKey, int> ids;
     std::vector<std::array<double, 4>> shapes;  // hx, hy, hz, region of each distinct key
     matrix_id.resize(graph.n_elements);
@@ -290,7 +291,7 @@ SparseMatrix assemble(Kind kind, const mesh::Mesh& mesh, const mesh::DofMap& dof
 #pragma omp for schedule(dynamic, 1)
         for (int id = 0; id < static_cast<int>(shapes.size()); ++id) {
           try {
-            brick_coordinates(basis, shapes[id][0], shapes[id][1], shapes[id][2], coords.data());
+            brick_coordinates(*basis.hexahedron(), shapes[id][0], shapes[id][1], shapes[id][2], coords.data());
             element_matrix(kind, basis, coords.data(), materials[static_cast<int>(shapes[id][3])],
                            cached[id]);
           } catch (const std::exception& exception) {
@@ -412,10 +413,11 @@ SparseMatrix assemble_consistent_mass(const mesh::Mesh& mesh, const mesh::DofMap
 }
 
 VectorX assemble_lumped_mass(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const Materials& materials) {
-  // GLL nodal quadrature of eq. (25c): diagonal, one entry per DOF, same for the 3 components.
+  // GLL nodal quadrature of eq. (25c) (hexahedra) or HRZ lumping (tetrahedra): diagonal, one entry
+  // per DOF, same for the 3 components.
   check_inputs(mesh, dofs, &materials);
-  const HexBasis basis(mesh.order);
-  const int npe = basis.n_nodes;
+  const ElementBasis basis(mesh);
+  const int npe = basis.n_nodes();
   VectorX nodal = VectorX::Zero(dofs.n_dof_nodes);
   std::vector<double> coords(3 * npe), mass(npe);
   for (Index e = 0; e < mesh.n_elements(); ++e) {
@@ -424,7 +426,7 @@ VectorX assemble_lumped_mass(const mesh::Mesh& mesh, const mesh::DofMap& dofs, c
       for (int c = 0; c < 3; ++c) coords[3 * a + c] = mesh.nodes[nodes[a]][c];
     }
     try {
-      element_lumped_mass_scalar(basis, coords.data(), mass.data());
+      basis.lumped_mass_scalar(coords.data(), mass.data());
     } catch (const InputError& exception) {
       throw InputError("element " + std::to_string(e) + ": " + exception.what());
     }

@@ -21,7 +21,8 @@ SparseMatrix assemble_stiffness(const mesh::Mesh& mesh, const mesh::DofMap& dofs
 SparseMatrix assemble_consistent_mass(const mesh::Mesh& mesh, const mesh::DofMap& dofs,
                                       const Materials& materials);
 
-/// Diagonal lumped mass (one entry per DOF) by GLL nodal quadrature: strictly positive.
+/// Diagonal lumped mass (one entry per DOF): GLL nodal quadrature on hexahedra, HRZ lumping (diagonal
+/// of the consistent mass scaled to the element mass) on tetrahedra. Strictly positive.
 VectorX assemble_lumped_mass(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const Materials& materials);
 
 /// Knobs of the global assembly (defaults are what production runs use).

@@ -3,6 +3,7 @@
 #include <Eigen/LU>
 
 #include "core/errors.hpp"
+#include "fem/tabulated.hpp"
 
 namespace crackle::fem {
 namespace {
@@ -76,8 +77,21 @@ HexBasis::HexBasis(int order_)
   }
 }
 
-void element_stiffness(const HexBasis& basis, const double* coords, const Material& material,
-                       MatrixX& stiffness) {
+namespace {
+
+TabulatedBasis view(const HexBasis& basis) {
+  return {basis.n_nodes, basis.n_points, basis.weights.data(), basis.values.data(), basis.gradients.data()};
+}
+
+}  // namespace
+
+double tabulated_determinant(const TabulatedBasis& basis, const double* coords, int q) {
+  const double* dshape = basis.gradients + static_cast<std::size_t>(q) * basis.n_nodes * 3;
+  return checked_determinant(jacobian(basis.n_nodes, coords, dshape));
+}
+
+void tabulated_stiffness(const TabulatedBasis& basis, const double* coords, const Material& material,
+                         MatrixX& stiffness) {
   // K_ab = sum_q w_q det J_q B_a^T D B_b (eq. 25a), B_a the 6x3 strain-displacement block of node a
   // (Voigt xx, yy, zz, yz, xz, xy). B_a has 9 nonzeros out of 18; both products below use that.
   const int n = basis.n_nodes;
@@ -131,7 +145,7 @@ void element_stiffness(const HexBasis& basis, const double* coords, const Materi
   }
 }
 
-void element_mass_scalar(const HexBasis& basis, const double* coords, MatrixX& mass) {
+void tabulated_mass_scalar(const TabulatedBasis& basis, const double* coords, MatrixX& mass) {
   // M_ab = sum_q w_q det J_q N_a N_b (eq. 25c without rho).
   const int n = basis.n_nodes;
   mass.setZero(n, n);
@@ -147,6 +161,15 @@ void element_mass_scalar(const HexBasis& basis, const double* coords, MatrixX& m
   for (int b = 0; b < n; ++b) {
     for (int a = 0; a < b; ++a) mass(b, a) = mass(a, b);
   }
+}
+
+void element_stiffness(const HexBasis& basis, const double* coords, const Material& material,
+                       MatrixX& stiffness) {
+  tabulated_stiffness(view(basis), coords, material, stiffness);
+}
+
+void element_mass_scalar(const HexBasis& basis, const double* coords, MatrixX& mass) {
+  tabulated_mass_scalar(view(basis), coords, mass);
 }
 
 void element_lumped_mass_scalar(const HexBasis& basis, const double* coords, double* mass) {
@@ -184,7 +207,7 @@ void element_lumped_mass_scalar(const HexBasis& basis, const double* coords, dou
   for (int a = 0; a < basis.n_nodes; ++a) mass[a] *= scale;
 }
 
-void element_shape_integrals(const HexBasis& basis, const double* coords, double* integrals) {
+void tabulated_shape_integrals(const TabulatedBasis& basis, const double* coords, double* integrals) {
   const int n = basis.n_nodes;
   for (int a = 0; a < n; ++a) integrals[a] = 0.0;
   for (int q = 0; q < basis.n_points; ++q) {
@@ -193,6 +216,10 @@ void element_shape_integrals(const HexBasis& basis, const double* coords, double
     const double* shape = &basis.values[static_cast<std::size_t>(q) * n];
     for (int a = 0; a < n; ++a) integrals[a] += scale * shape[a];
   }
+}
+
+void element_shape_integrals(const HexBasis& basis, const double* coords, double* integrals) {
+  tabulated_shape_integrals(view(basis), coords, integrals);
 }
 
 void brick_coordinates(const HexBasis& basis, double hx, double hy, double hz, double* coords) {

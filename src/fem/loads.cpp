@@ -7,7 +7,7 @@
 #include <string>
 
 #include "core/errors.hpp"
-#include "fem/element.hpp"
+#include "fem/element_basis.hpp"
 
 namespace crackle::fem {
 namespace {
@@ -56,8 +56,32 @@ class FaceRule {
   std::vector<double> values_, derivatives_;  ///< [q][a] of the 1D basis at the Gauss points
 };
 
+/// Gauss quadrature of one triangular face of a tetrahedron (3 or 6 nodes, mesh::face_local_nodes),
+/// parametrised by (s, t) on the reference triangle: same interface as FaceRule.
+class TriangleFaceRule {
+ public:
+  explicit TriangleFaceRule(int order) : order_(order), n_nodes_(order == 2 ? 6 : 3), rule_(triangle_rule(order + 2)) {}
+  int n_points() const { return rule_.size(); }
+  int n_nodes() const { return n_nodes_; }
+  double evaluate(const std::vector<Vec3>& x, int q, double* shape) const {
+    double gradients[12];
+    triangle_shape(order_, rule_.s[q], rule_.t[q], shape, gradients);
+    Vec3 ds = Vec3::Zero(), dt = Vec3::Zero();
+    for (int a = 0; a < n_nodes_; ++a) {
+      ds += gradients[2 * a] * x[a];
+      dt += gradients[2 * a + 1] * x[a];
+    }
+    return rule_.weights[q] * ds.cross(dt).norm();
+  }
+
+ private:
+  int order_, n_nodes_;
+  TriangleRule rule_;
+};
+
 void check_face(const mesh::Mesh& mesh, const mesh::FaceRef& face) {
-  if (face.element < 0 || face.element >= mesh.n_elements() || face.local_face < 0 || face.local_face > 5) {
+  if (face.element < 0 || face.element >= mesh.n_elements() || face.local_face < 0 ||
+      face.local_face >= mesh.faces_per_element()) {
     throw InputError("face (element " + std::to_string(face.element) + ", local face " +
                      std::to_string(face.local_face) + ") does not exist in a mesh of " +
                      std::to_string(mesh.n_elements()) + " elements");
@@ -87,16 +111,16 @@ void add_point_force(const mesh::DofMap& dofs, const std::vector<Index>& nodes, 
   }
 }
 
-void add_face_traction(const mesh::Mesh& mesh, const mesh::DofMap& dofs,
-                       const std::vector<mesh::FaceRef>& faces, const Vec3& traction, VectorX& force) {
-  // Second term of eq. (25b) with a uniform traction: f_a = t \int_face N_a dGamma.
-  prepare(dofs, force);
-  const FaceRule rule(mesh.order);
+namespace {
+
+template <class Rule>
+void face_traction(const Rule& rule, const mesh::Mesh& mesh, const mesh::DofMap& dofs,
+                   const std::vector<mesh::FaceRef>& faces, const Vec3& traction, VectorX& force) {
   std::vector<Vec3> x(rule.n_nodes());
   std::vector<double> shape(rule.n_nodes()), integral(rule.n_nodes());
-  std::vector<std::vector<int>> local(6);
-  for (int f = 0; f < 6; ++f) {
-    local[f] = mesh::face_local_nodes(mesh.order, f);
+  std::vector<std::vector<int>> local(mesh.faces_per_element());
+  for (int f = 0; f < mesh.faces_per_element(); ++f) {
+    local[f] = mesh::face_local_nodes(mesh.shape, mesh.order, f);
     assert(static_cast<int>(local[f].size()) == rule.n_nodes());
   }
   for (const mesh::FaceRef& face : faces) {
@@ -116,12 +140,12 @@ void add_face_traction(const mesh::Mesh& mesh, const mesh::DofMap& dofs,
   }
 }
 
-double face_area(const mesh::Mesh& mesh, const std::vector<mesh::FaceRef>& faces) {
-  const FaceRule rule(mesh.order);
+template <class Rule>
+double faces_area(const Rule& rule, const mesh::Mesh& mesh, const std::vector<mesh::FaceRef>& faces) {
   std::vector<Vec3> x(rule.n_nodes());
   std::vector<double> shape(rule.n_nodes());
-  std::vector<std::vector<int>> local(6);
-  for (int f = 0; f < 6; ++f) local[f] = mesh::face_local_nodes(mesh.order, f);
+  std::vector<std::vector<int>> local(mesh.faces_per_element());
+  for (int f = 0; f < mesh.faces_per_element(); ++f) local[f] = mesh::face_local_nodes(mesh.shape, mesh.order, f);
   double area = 0.0;
   for (const mesh::FaceRef& face : faces) {
     check_face(mesh, face);
@@ -132,12 +156,30 @@ double face_area(const mesh::Mesh& mesh, const std::vector<mesh::FaceRef>& faces
   return area;
 }
 
+}  // namespace
+
+void add_face_traction(const mesh::Mesh& mesh, const mesh::DofMap& dofs,
+                       const std::vector<mesh::FaceRef>& faces, const Vec3& traction, VectorX& force) {
+  // Second term of eq. (25b) with a uniform traction: f_a = t \int_face N_a dGamma.
+  prepare(dofs, force);
+  if (mesh.shape == mesh::ElementShape::tetrahedron) {
+    face_traction(TriangleFaceRule(mesh.order), mesh, dofs, faces, traction, force);
+  } else {
+    face_traction(FaceRule(mesh.order), mesh, dofs, faces, traction, force);
+  }
+}
+
+double face_area(const mesh::Mesh& mesh, const std::vector<mesh::FaceRef>& faces) {
+  if (mesh.shape == mesh::ElementShape::tetrahedron) return faces_area(TriangleFaceRule(mesh.order), mesh, faces);
+  return faces_area(FaceRule(mesh.order), mesh, faces);
+}
+
 void add_body_force(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const Materials& materials,
                     const Vec3& acceleration, VectorX& force) {
   // First term of eq. (25b): f_a = rho b \int N_a dOmega (consistent, Gauss rule).
   prepare(dofs, force);
-  const HexBasis basis(mesh.order);
-  const int npe = basis.n_nodes;
+  const ElementBasis basis(mesh);
+  const int npe = basis.n_nodes();
   std::vector<double> coords(3 * npe), integrals(npe);
   for (Index e = 0; e < mesh.n_elements(); ++e) {
     const int region = e < static_cast<Index>(mesh.element_region.size()) ? mesh.element_region[e] : -1;
@@ -150,7 +192,7 @@ void add_body_force(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const Mate
       for (int c = 0; c < 3; ++c) coords[3 * a + c] = mesh.nodes[nodes[a]][c];
     }
     try {
-      element_shape_integrals(basis, coords.data(), integrals.data());
+      basis.shape_integrals(coords.data(), integrals.data());
     } catch (const InputError& exception) {
       throw InputError("element " + std::to_string(e) + ": " + exception.what());
     }

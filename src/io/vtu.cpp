@@ -23,7 +23,8 @@ void append_block(std::string& data, const std::vector<T>& values) {
 void write_vtu(const std::filesystem::path& path, const mesh::Mesh& mesh,
                const std::vector<PointField>& point_fields, const std::vector<CellField>& cell_fields) {
   const int p = mesh.order, n = p + 1;
-  const Index n_cells = mesh.n_elements() * p * p * p;
+  const bool tetrahedra = mesh.shape == mesh::ElementShape::tetrahedron;
+  const Index n_cells = tetrahedra ? mesh.n_elements() : mesh.n_elements() * p * p * p;
   for (const PointField& field : point_fields) {
     if (field.values.size() != static_cast<std::size_t>(mesh.n_nodes()) * field.components) {
       throw IoError(path.string() + ": point field '" + field.name + "' has " +
@@ -45,10 +46,20 @@ void write_vtu(const std::filesystem::path& path, const mesh::Mesh& mesh,
   std::vector<std::int64_t> connectivity;
   connectivity.reserve(8 * static_cast<std::size_t>(n_cells));
   std::vector<std::int64_t> offsets(n_cells);
-  std::vector<std::uint8_t> types(n_cells, 12);  // VTK_HEXAHEDRON
+  // VTK_HEXAHEDRON; tetrahedra: VTK_TETRA or VTK_QUADRATIC_TETRA
+  std::vector<std::uint8_t> types(n_cells, tetrahedra ? (p == 2 ? 24 : 10) : 12);
   std::vector<std::int32_t> element_of_cell(n_cells);
   Index cell = 0;
-  for (Index e = 0; e < mesh.n_elements(); ++e) {
+  for (Index e = 0; tetrahedra && e < mesh.n_elements(); ++e) {
+    // VTK orders the last two edge nodes 13, 23; Gmsh (and crackle) 32, 31.
+    static const int vtk_order[10] = {0, 1, 2, 3, 4, 5, 6, 7, 9, 8};
+    const Index* nodes = mesh.element_nodes(e);
+    for (int a = 0; a < mesh.nodes_per_element(); ++a) connectivity.push_back(nodes[vtk_order[a]]);
+    offsets[cell] = static_cast<std::int64_t>(connectivity.size());
+    element_of_cell[cell] = e;
+    ++cell;
+  }
+  for (Index e = 0; !tetrahedra && e < mesh.n_elements(); ++e) {
     const Index* nodes = mesh.element_nodes(e);
     for (int k = 0; k < p; ++k)
       for (int j = 0; j < p; ++j)

@@ -1,6 +1,7 @@
 #pragma once
 /// \file VTK unstructured-grid (.vtu) files that open in ParaView. Each GLL hexahedron of order
-/// p is written as p^3 linear hexahedra over its nodes, so any order renders everywhere.
+/// p is written as p^3 linear hexahedra over its nodes, so any order renders everywhere; tetrahedra
+/// as VTK (quadratic) tetrahedra.
 #include <filesystem>
 #include <string>
 #include <vector>

@@ -7,7 +7,22 @@
 
 namespace crackle::mesh {
 
+const char* shape_name(ElementShape shape) {
+  return shape == ElementShape::tetrahedron ? "tetrahedron" : "hexahedron";
+}
+
 double Mesh::volume() const {
+  if (shape == ElementShape::tetrahedron) {
+    // Straight-sided tetrahedra: det[x1 - x0, x2 - x0, x3 - x0] / 6 from the vertices.
+    double total = 0.0;
+    for (Index e = 0; e < n_elements(); ++e) {
+      const Index* element = element_nodes(e);
+      Eigen::Matrix3d edges;
+      for (int c = 0; c < 3; ++c) edges.col(c) = nodes[element[c + 1]] - nodes[element[0]];
+      total += edges.determinant() / 6.0;
+    }
+    return total;
+  }
   // Volume from the eight corners by the 2x2x2 Gauss rule on the trilinear map (exact for bricks
   // and for any trilinear hexahedron).
   const int n = nodes_per_edge();
@@ -56,6 +71,32 @@ std::vector<int> face_local_nodes(int order, int local_face) {
       ijk[second] = t2;
       result.push_back(ijk[0] + n * (ijk[1] + n * ijk[2]));
     }
+  }
+  return result;
+}
+
+const std::array<int, 3>& tetrahedron_face_vertices(int local_face) {
+  assert(local_face >= 0 && local_face < 4);
+  static const std::array<int, 3> faces[4] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  return faces[local_face];
+}
+
+int tetrahedron_edge_node(int a, int b) {
+  // Gmsh's 10-node tetrahedron: node 4 + k on edge k of 01, 12, 20, 30, 32, 31.
+  static const int edges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {3, 0}, {3, 2}, {3, 1}};
+  for (int k = 0; k < 6; ++k) {
+    if ((edges[k][0] == a && edges[k][1] == b) || (edges[k][0] == b && edges[k][1] == a)) return 4 + k;
+  }
+  assert(false && "not an edge of a tetrahedron");
+  return -1;
+}
+
+std::vector<int> face_local_nodes(ElementShape shape, int order, int local_face) {
+  if (shape == ElementShape::hexahedron) return face_local_nodes(order, local_face);
+  const std::array<int, 3>& v = tetrahedron_face_vertices(local_face);
+  std::vector<int> result(v.begin(), v.end());
+  if (order == 2) {
+    for (int k = 0; k < 3; ++k) result.push_back(tetrahedron_edge_node(v[k], v[(k + 1) % 3]));
   }
   return result;
 }

@@ -622,6 +622,11 @@ void ElasticOperator::Impl::general_chunk(Index chunk, const double* x, double* 
 ElasticOperator::ElasticOperator(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const fem::Materials& materials,
                                  const ElasticOperatorOptions& options)
     : impl_(std::make_unique<Impl>()) {
+  if (mesh.shape != mesh::ElementShape::hexahedron) {
+    // The matrix-free kernels are written for GLL hexahedra (sum factorisation, brick cache).
+    throw InputError(std::string("transient runs need hexahedral elements; this mesh has ") +
+                     mesh::shape_name(mesh.shape) + "s (use 8- or 27-node hexahedra; tetrahedra work for modal)");
+  }
   Impl& impl = *impl_;
   impl.order = mesh.order;
   impl.m = mesh.order + 1;

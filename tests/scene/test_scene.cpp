@@ -92,7 +92,8 @@ TEST(Scene, LoadsAFile) {
   EXPECT_EQ(scene.file, path);
   EXPECT_EQ(scene.box.cells[0], 40);
   EXPECT_EQ(error_of(""),
-            "beam.yaml: expected a map with keys mesh, material, boundary, crack, modal, got an empty file");
+            "beam.yaml: expected a map with keys mesh, material, materials, boundary, crack, modal, transient, spectrum, "
+            "got an empty file");
 }
 
 TEST(Scene, DefaultsComeFromTheTable) {
@@ -136,7 +137,7 @@ struct BadScene {
 };
 
 TEST(Scene, BadScenesGiveOneExactLine) {
-  const std::string sections = "mesh, material, boundary, crack, modal";
+  const std::string sections = "mesh, material, materials, boundary, crack, modal, transient, spectrum";
   const std::vector<BadScene> cases = {
       // the file as a whole
       {"# only a comment\n", "beam.yaml: expected a map with keys " + sections + ", got an empty file"},
@@ -149,10 +150,10 @@ TEST(Scene, BadScenesGiveOneExactLine) {
                                             ", got unknown section 'modall' (did you mean 'modal'?)"},
       // required keys
       {box(), "beam.yaml:1: material: expected a map with keys E, nu, rho, got nothing"},
-      {material(), "beam.yaml:1: mesh: expected exactly one of: box, got nothing"},
-      {material() + "mesh: {}\n", "beam.yaml:2: mesh: expected exactly one of: box, got none"},
-      {material() + "mesh: {gmsh: part.msh}\n",
-       "beam.yaml:2: mesh.gmsh: expected one of box, got unknown key 'gmsh'"},
+      {material(), "beam.yaml:1: mesh: expected exactly one of: box, gmsh, got nothing"},
+      {material() + "mesh: {}\n", "beam.yaml:2: mesh: expected exactly one of: box, gmsh, got none"},
+      {material() + "mesh: {stl: part.stl}\n",
+       "beam.yaml:2: mesh.stl: expected one of box, gmsh, got unknown key 'stl'"},
       {box() + material("E: 210e9, nu: 0.3"),
        "beam.yaml:6: material.rho: expected a positive number, got nothing"},
       {"mesh:\n  box: {cells: [40, 4, 2], order: 2}\n" + material(),
@@ -203,7 +204,7 @@ TEST(Scene, BadScenesGiveOneExactLine) {
        "beam.yaml:3: mesh.box.size[1]: expected a positive number, got -0.02"},
       // boundary conditions
       {kBody + "boundary: {face: x-, fix: [x]}\n",
-       "beam.yaml:7: boundary: expected a list of maps with keys face, fix, value, got a map"},
+       "beam.yaml:7: boundary: expected a list of maps with keys face, group, fix, value, got a map"},
       {kBody + "boundary:\n  - {face: top, fix: [x]}\n",
        "beam.yaml:8: boundary[0].face: expected one of x-, x+, y-, y+, z-, z+, got 'top'"},
       {kBody + "boundary:\n  - {face: x-}\n",
@@ -250,7 +251,7 @@ TEST(Scene, BadScenesGiveOneExactLine) {
       {kBody + "crack:\n  plane: {normal: x, at: 0.05}\n",
        "beam.yaml:7: crack.region: expected a map with keys x, y, z, got nothing"},
       {kBody + "crack:\n  plane: {normal: x, at: 0.05}\n  regoin: {y: [0, 0.02], z: [0.007, 0.01]}\n",
-       "beam.yaml:9: crack.regoin: expected one of plane, region, gap, got unknown key 'regoin' "
+       "beam.yaml:9: crack.regoin: expected one of plane, region, group, gap, contact, got unknown key 'regoin' "
        "(did you mean 'region'?)"},
       // the modal section
       {kBody + "modal: {modes: 0}\n", "beam.yaml:7: modal.modes: expected a positive integer, got 0"},
@@ -287,7 +288,7 @@ TEST(Scene, DidYouMean) {
       error_of(box() + material("E: 2e11, Nu: 0.3, rho: 7850")),
       "beam.yaml:6: material.Nu: expected one of E, nu, rho, got unknown key 'Nu' (did you mean 'nu'?)");
   EXPECT_EQ(error_of("mesh:\n  box: {size: [1, 1, 1], cels: [1, 1, 1], order: 1}\n" + material()),
-            "beam.yaml:2: mesh.box.cels: expected one of origin, size, cells, order, got unknown key 'cels' "
+            "beam.yaml:2: mesh.box.cels: expected one of origin, size, cells, order, lines, got unknown key 'cels' "
             "(did you mean 'cells'?)");
 }
 
@@ -315,7 +316,7 @@ TEST(Scene, OverridesByKeyPath) {
             "0.055), "
             "got 0.052");
   EXPECT_EQ(error_of(kBeam, {{"crack.regoin.z", "[0, 0.01]"}}),
-            "beam.yaml: crack.regoin: expected one of plane, region, gap, got unknown key 'regoin' "
+            "beam.yaml: crack.regoin: expected one of plane, region, group, gap, contact, got unknown key 'regoin' "
             "(did you mean 'region'?)");
   EXPECT_EQ(error_of(kBeam, {{"boundary[3].face", "x+"}}),
             "beam.yaml: boundary: expected a list with an entry 3, got a list of 1 entry");
