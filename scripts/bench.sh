@@ -1,18 +1,130 @@
 #!/usr/bin/env bash
 # Runs the benchmarks and prints Markdown tables for docs/benchmarks.md.
-# Usage: scripts/bench.sh [assembly|modal|all]   (default all). Builds first.
+# Usage: scripts/bench.sh [assembly|modal|transient|spectrum|study|all]   (default all)
+#
+# Environment:
+#   BUILD=dir        use an existing build folder (e.g. build-bench) and only rebuild it; without it
+#                    scripts/build.sh builds build/ first. BENCH_NO_BUILD=1: do not even rebuild it.
+#   BENCH_OUT=dir    where the runs write their outputs (default /tmp/crackle-bench).
+#   BENCH_LARGE=1    also run the ~600k-DOF modal case (ARPACK + CHOLMOD, about 6 min and 16 GB).
+#   STUDY_DIR=dir    output folder of `crackle study data/depth-study.yaml` for the study section
+#                    (default /tmp/depth-study; STUDY_TIME=file with its /usr/bin/time output).
+# Every table is preceded by the load average at its start: the figures are best-of-N wall times
+# on whatever machine runs this, so compare them only with that load in mind.
+# Compute (2 loaded cores, 2026-11-22): assembly ~0.5 min, modal ~5 min (+6 with BENCH_LARGE),
+# transient ~7 min, spectrum ~6 min.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 what="${1:-all}"
-scripts/build.sh >/dev/null
-echo "machine: $(nproc) cores, $(free -g | awk '/Mem/{print $2}') GiB, $(lscpu | sed -n 's/Model name: *//p'); date: $(date -u +%F)"
-if [[ "$what" == assembly || "$what" == all ]]; then
+case "$what" in assembly|modal|transient|spectrum|study|all) ;; *)
+  echo "usage: scripts/bench.sh [assembly|modal|transient|spectrum|study|all]" >&2; exit 2 ;;
+esac
+if [[ -n "${BUILD:-}" ]]; then
+  [[ "${BENCH_NO_BUILD:-0}" == 1 ]] || cmake --build "$BUILD" -j"$(nproc)" >/dev/null
+else
+  scripts/build.sh >/dev/null
+  BUILD=build
+fi
+out="${BENCH_OUT:-/tmp/crackle-bench}"
+mkdir -p "$out"
+crackle="$BUILD/apps/crackle"
+load() { echo; echo "_load average at start: $(cut -d' ' -f1-3 /proc/loadavg), $(date -u '+%F %H:%M') UTC_"; echo; }
+want() { [[ "$what" == "$1" || "$what" == all ]]; }
+
+echo "machine: $(lscpu | sed -n 's/Model name: *//p'), $(nproc) cores, $(free -g | awk '/Mem/{print $2}') GiB; date: $(date -u +%F)"
+
+if want assembly; then
   echo
+  echo "### Assembly of K and lumped M (bench_assembly CELLS ORDER 2: best of 2)"
+  load
   echo "| p | cells | DOFs | threads | K nonzeros | K MiB | K s | lumped M s | peak RSS MiB |"
   echo "|---|---|---|---|---|---|---|---|---|"
   for config in "32 1" "69 1" "16 2" "35 2"; do
     for threads in 1 2; do
-      OMP_NUM_THREADS=$threads build/bench/bench_assembly $config 2
+      OMP_NUM_THREADS=$threads "$BUILD"/bench/bench_assembly $config 2
     done
   done
+fi
+
+if want modal; then
+  echo
+  echo "### Modal work-precision: data/beam.yaml, 6 modes, uncracked and open"
+  load
+  python3 bench/modal_wp.py "$crackle" "$out/modal-wp"
+  mkdir -p docs/img
+  sed "s#set output .*#set output 'docs/img/modal-work-precision.png'#" "$out/modal-wp/modal_wp.gp" | gnuplot
+  echo
+  echo "Plot: docs/img/modal-work-precision.png"
+  echo
+  echo "### Modal scale: unit cube clamped on x-, p = 2, 10 modes (bench_modal)"
+  load
+  echo "| route | p | cells | free DOFs | ranks | BLAS threads | assembly s | factorisation s | iterations s | backend s | post s | total s | RSS rank 0 MiB | f1 Hz | wall s | peak RSS MiB (time -v) |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+  modal_case() {  # cells route ranks blas
+    local cells=$1 route=$2 ranks=$3 blas=$4 pre=() row
+    if ((ranks > 1)); then
+      pre=(mpirun --allow-run-as-root --oversubscribe -np "$ranks" -x OMP_NUM_THREADS=1 -x OPENBLAS_NUM_THREADS=1)
+    fi
+    row=$(OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=$blas /usr/bin/time -v -o "$out/modal-time.txt" \
+          "${pre[@]}" "$BUILD"/bench/bench_modal "$cells" 2 "$route" 10 2>/dev/null | grep '^|' || true)
+    local wall rss
+    wall=$(awk -F': ' '/Elapsed/{n=split($2,a,":"); s=0; for(i=1;i<=n;i++) s=s*60+a[i]; print s}' "$out/modal-time.txt")
+    rss=$(awk -F': ' '/Maximum resident/{printf "%.0f", $2/1024}' "$out/modal-time.txt")
+    if [[ -z "$row" ]]; then row="| $route | 2 | $cells^3 | failed | $ranks | | | | | | | | | |"; fi
+    # insert the BLAS thread count after the ranks column, append wall and peak RSS
+    echo "$row" | awk -F'|' -v b="$blas" -v w="$wall" -v r="$rss" 'BEGIN{OFS="|"}{
+      line=""; for(i=2;i<NF;i++){ line=line "|" $i; if(i==6) line=line "| " b " " } print line "| " w " | " r " |" }'
+  }
+  for c in "slepc-cholmod 1 1" "slepc-cholmod 1 2" "arpack 1 1" "slepc-mumps 1 1" "slepc-mumps 2 1"; do
+    modal_case 15 $c
+  done
+  modal_case 20 arpack 1 1
+  if [[ "${BENCH_LARGE:-0}" == 1 ]]; then
+    modal_case 29 arpack 1 1
+  fi
+fi
+
+if want transient; then
+  echo
+  echo "### Transient cost per DOF and step (bench_transient, unit cube with a crack in contact)"
+  load
+  echo "| p | elements | DOFs | threads | kernel | steps | ns/DOF-step | setup s | contact % | crack pairs |"
+  echo "|---|---|---|---|---|---|---|---|---|---|"
+  "$BUILD"/bench/bench_transient --orders 1,2,3,4 --elements 1e4,1e5,1e6 --threads 1,2 --seconds 1.5 \
+      --max-dofs 3.5e6 --crack 2>/dev/null | awk 'NR>1{printf "|"; for(i=1;i<=NF;i++) printf " %s |", $i; print ""}'
+  echo
+  echo "### Transient stability map: data/beam.yaml, cells [10,1,2], p = 1"
+  load
+  python3 bench/stability_map.py "$crackle" "$out/stability"
+fi
+
+if want spectrum; then
+  echo
+  echo "### Spectrum and transient accuracy against cost: data/beam.yaml at f1/2"
+  load
+  python3 bench/spectrum_wp.py "$crackle" "$out/spectrum" --budget 900
+  mkdir -p docs/img
+  sed "s#set output .*#set output 'docs/img/spectrum-work-precision.png'#" "$out/spectrum/spectrum_wp.gp" | gnuplot
+  echo
+  echo "Plot: docs/img/spectrum-work-precision.png"
+fi
+
+if want study; then
+  echo
+  echo "### Depth study: crackle study data/depth-study.yaml"
+  echo
+  dir="${STUDY_DIR:-/tmp/depth-study}"
+  if [[ -f "$dir/study.csv" ]]; then
+    [[ -f "${STUDY_TIME:-/tmp/depth.time}" ]] && echo "time: $(tr '\n' ' ' < "${STUDY_TIME:-/tmp/depth.time}")" && echo
+    python3 - "$dir/study.csv" <<'EOF'
+import csv, sys
+rows = list(csv.reader(open(sys.argv[1])))
+print("| " + " | ".join(rows[0]) + " |")
+print("|" + "---|" * len(rows[0]))
+for row in rows[1:]:
+    print("| " + " | ".join(row) + " |")
+EOF
+  else
+    echo "(no $dir/study.csv: run \`/usr/bin/time -v -o /tmp/depth.time crackle study data/depth-study.yaml -o $dir\` first)"
+  fi
 fi
