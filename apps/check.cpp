@@ -24,8 +24,13 @@ void run_check(const CheckOptions& options, std::ostream& out) {
   for (const mesh::CrackPair& pair : mesh.crack_pairs) front += pair.on_front();
 
   out << "scene        " << scene.file << "\n";
-  out << "mesh         box " << scene.box.cells[0] << " x " << scene.box.cells[1] << " x " << scene.box.cells[2]
-      << " cells requested, order p = " << mesh.order << "\n";
+  if (scene.gmsh_file.empty()) {
+    out << "mesh         box " << scene.box.cells[0] << " x " << scene.box.cells[1] << " x " << scene.box.cells[2]
+        << " cells requested, order p = " << mesh.order << "\n";
+  } else {
+    out << "mesh         " << scene.gmsh_file << ": " << mesh::shape_name(mesh.shape) << " elements of order " << mesh.order
+        << "\n";
+  }
   out << "elements     " << mesh.n_elements() << "\n";
   out << "nodes        " << mesh.n_nodes() << " (" << mesh.n_original_nodes << " + "
       << mesh.n_nodes() - mesh.n_original_nodes << " crack-face copies)\n";
