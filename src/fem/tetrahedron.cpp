@@ -47,26 +47,6 @@ void tetrahedron_shape(int order, const double xi[3], double* values, double* gr
   }
 }
 
-void triangle_shape(int order, double s, double t, double* values, double* gradients) {
-  const double lambda[3] = {1.0 - s - t, s, t};
-  static const double dlambda[3][2] = {{-1, -1}, {1, 0}, {0, 1}};
-  if (order == 1) {
-    for (int a = 0; a < 3; ++a) {
-      values[a] = lambda[a];
-      for (int j = 0; j < 2; ++j) gradients[2 * a + j] = dlambda[a][j];
-    }
-    return;
-  }
-  for (int a = 0; a < 3; ++a) {
-    values[a] = lambda[a] * (2.0 * lambda[a] - 1.0);
-    for (int j = 0; j < 2; ++j) gradients[2 * a + j] = (4.0 * lambda[a] - 1.0) * dlambda[a][j];
-  }
-  for (int k = 0; k < 3; ++k) {
-    const int i = k, l = (k + 1) % 3;
-    values[3 + k] = 4.0 * lambda[i] * lambda[l];
-    for (int j = 0; j < 2; ++j) gradients[2 * (3 + k) + j] = 4.0 * (dlambda[i][j] * lambda[l] + lambda[i] * dlambda[l][j]);
-  }
-}
 
 TriangleRule triangle_rule(int n) {
   // (s, t) = (u, (1 - u) v) on the unit square, dA = (1 - u) du dv.

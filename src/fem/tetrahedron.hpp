@@ -13,6 +13,7 @@
 #include "core/types.hpp"
 #include "fem/material.hpp"
 #include "fem/tabulated.hpp"
+#include "mesh/topology.hpp"
 
 namespace crackle::fem {
 
@@ -20,9 +21,8 @@ namespace crackle::fem {
 /// (0,0,0), (1,0,0), (0,1,0), (0,0,1)): values[a], gradients[3a + j] = dN_a/dxi_j.
 void tetrahedron_shape(int order, const double xi[3], double* values, double* gradients);
 
-/// Shape functions of the triangle of order 1 or 2 (vertices (0,0), (1,0), (0,1), then the
-/// midpoints of edges 01, 12, 20) at (s, t): values[a], gradients[2a + j] = dN_a/ds_j.
-void triangle_shape(int order, double s, double t, double* values, double* gradients);
+/// Shape functions of the triangle of order 1 or 2 (faces of tetrahedra): the mesh layer's.
+using mesh::triangle_shape;
 
 /// A quadrature rule on the reference triangle (weights sum to 1/2).
 struct TriangleRule {

@@ -7,10 +7,7 @@
 #include "core/quadrature.hpp"
 
 namespace crackle::mesh {
-namespace {
 
-/// Shape functions of the triangle of order 1 or 2 at (s, t): vertices (0,0), (1,0), (0,1), then
-/// the midpoints of edges 01, 12, 20. gradients[2a + j] = dN_a/ds_j.
 void triangle_shape(int order, double s, double t, double* values, double* gradients) {
   const double lambda[3] = {1.0 - s - t, s, t};
   static const double dlambda[3][2] = {{-1, -1}, {1, 0}, {0, 1}};
@@ -31,6 +28,8 @@ void triangle_shape(int order, double s, double t, double* values, double* gradi
     for (int j = 0; j < 2; ++j) gradients[2 * (3 + k) + j] = 4.0 * (dlambda[i][j] * lambda[l] + lambda[i] * dlambda[l][j]);
   }
 }
+
+namespace {
 
 /// x_s x x_t of a triangle face at (s, t).
 Vec3 triangle_normal(int order, const std::vector<Vec3>& x, double s, double t) {

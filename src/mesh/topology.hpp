@@ -9,6 +9,10 @@
 
 namespace crackle::mesh {
 
+/// Shape functions of the triangle of order 1 or 2 (vertices (0,0), (1,0), (0,1), then the
+/// midpoints of edges 01, 12, 20) at (s, t): values[a], gradients[2a + j] = dN_a/ds_j.
+void triangle_shape(int order, double s, double t, double* values, double* gradients);
+
 /// A face by its corner nodes, sorted ascending; -1 pads the fourth entry of a triangle.
 using FaceKey = std::array<Index, 4>;
 
