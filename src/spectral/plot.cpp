@@ -16,19 +16,6 @@ namespace crackle::spectral {
 namespace fs = std::filesystem;
 namespace {
 
-std::string shell_quote(const std::string& text) {
-  std::string quoted = "'";
-  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return quoted + "'";
-}
-
-/// A gnuplot single-quoted string (no escapes inside except '' for ').
-std::string gnuplot_quote(const std::string& text) {
-  std::string quoted = "'";
-  for (char c : text) quoted += c == '\'' ? std::string("''") : std::string(1, c);
-  return quoted + "'";
-}
-
 std::string number_text(double value) {
   char buffer[64];
   auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
@@ -40,25 +27,6 @@ std::string order_label(double order) {
   return twice % 2 == 0 ? std::to_string(twice / 2) : std::to_string(twice) + "/2";
 }
 
-/// Full path of the executable, or empty.
-fs::path find_executable(const std::string& name) {
-  if (name.empty()) return {};
-  const auto runnable = [](const fs::path& path) {
-    std::error_code error;
-    return fs::is_regular_file(path, error) && ::access(path.c_str(), X_OK) == 0;
-  };
-  if (name.find('/') != std::string::npos) return runnable(name) ? fs::path(name) : fs::path();
-  const char* path_variable = std::getenv("PATH");
-  if (!path_variable) return {};
-  std::stringstream entries(path_variable);
-  std::string directory;
-  while (std::getline(entries, directory, ':')) {
-    if (directory.empty()) continue;
-    const fs::path candidate = fs::path(directory) / name;
-    if (runnable(candidate)) return candidate;
-  }
-  return {};
-}
 
 void write_text(const fs::path& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
@@ -125,6 +93,39 @@ PlotResult draw(const fs::path& png, const std::string& data, const std::string&
 }
 
 }  // namespace
+
+std::string shell_quote(const std::string& text) {
+  std::string quoted = "'";
+  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
+/// A gnuplot single-quoted string (no escapes inside except '' for ').
+std::string gnuplot_quote(const std::string& text) {
+  std::string quoted = "'";
+  for (char c : text) quoted += c == '\'' ? std::string("''") : std::string(1, c);
+  return quoted + "'";
+}
+
+/// Full path of the executable, or empty.
+fs::path find_executable(const std::string& name) {
+  if (name.empty()) return {};
+  const auto runnable = [](const fs::path& path) {
+    std::error_code error;
+    return fs::is_regular_file(path, error) && ::access(path.c_str(), X_OK) == 0;
+  };
+  if (name.find('/') != std::string::npos) return runnable(name) ? fs::path(name) : fs::path();
+  const char* path_variable = std::getenv("PATH");
+  if (!path_variable) return {};
+  std::stringstream entries(path_variable);
+  std::string directory;
+  while (std::getline(entries, directory, ':')) {
+    if (directory.empty()) continue;
+    const fs::path candidate = fs::path(directory) / name;
+    if (runnable(candidate)) return candidate;
+  }
+  return {};
+}
 
 bool gnuplot_available(const PlotOptions& options) {
   return !find_executable(options.gnuplot).empty();

@@ -28,6 +28,13 @@ struct PlotResult {
   std::filesystem::path data, script, png;
 };
 
+/// A word quoted for the POSIX shell.
+std::string shell_quote(const std::string& text);
+/// A gnuplot single-quoted string (no escapes inside except '' for ').
+std::string gnuplot_quote(const std::string& text);
+/// Full path of an executable (a path, or a bare name looked up in PATH), or empty.
+std::filesystem::path find_executable(const std::string& name);
+
 /// Whether the gnuplot of the options can be found (PATH lookup for a bare name).
 bool gnuplot_available(const PlotOptions& options);
 

@@ -14,36 +14,14 @@
 #include <set>
 #include <sstream>
 
+#include "spectral/plot.hpp"
+
 namespace crackle::study {
 namespace fs = std::filesystem;
+using spectral::find_executable;
+using spectral::gnuplot_quote;
+using spectral::shell_quote;
 namespace {
-
-std::string shell_quote(const std::string& text) {
-  std::string quoted = "'";
-  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return quoted + "'";
-}
-
-std::string gnuplot_quote(const std::string& text) {
-  std::string quoted = "'";
-  for (char c : text) quoted += c == '\'' ? std::string("''") : std::string(1, c);
-  return quoted + "'";
-}
-
-fs::path find_executable(const std::string& name) {
-  const auto runnable = [](const fs::path& path) {
-    std::error_code error;
-    return fs::is_regular_file(path, error) && ::access(path.c_str(), X_OK) == 0;
-  };
-  if (name.empty()) return {};
-  if (name.find('/') != std::string::npos) return runnable(name) ? fs::path(name) : fs::path();
-  const char* path_variable = std::getenv("PATH");
-  std::stringstream entries(path_variable ? path_variable : "");
-  std::string directory;
-  while (std::getline(entries, directory, ':'))
-    if (!directory.empty() && runnable(fs::path(directory) / name)) return fs::path(directory) / name;
-  return {};
-}
 
 bool write_text(const fs::path& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
