@@ -1,7 +1,5 @@
 /// \file ARPACK backend: implicitly restarted Lanczos (dsaupd/dseupd) in shift-invert mode 3 with
 /// a CHOLMOD factorisation of K - sigma M.
-#include <cholmod.h>
-
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
@@ -11,6 +9,7 @@
 
 #include "core/errors.hpp"
 #include "core/resources.hpp"
+#include "modal/cholmod_factor.hpp"
 #include "modal/eigensolver.hpp"
 
 // arpack-ng's C interface (arpack.h also declares the complex routines with C99 _Complex, which
@@ -27,77 +26,6 @@ void dseupd_c(int rvec, char const* howmny, int const* select, double* d, double
 
 namespace crackle::modal {
 namespace {
-
-/// Sparse Cholesky of a symmetric positive definite matrix by CHOLMOD (supernodal, BLAS-3).
-class CholmodFactor {
- public:
-  /// Factorises `matrix` (full symmetric CSR; only its upper triangle is read).
-  explicit CholmodFactor(const SparseMatrix& matrix) {
-    cholmod_start(&common_);
-    common_.print = 0;
-    common_.error_handler = nullptr;
-    // A symmetric CSR matrix read as CSC is the same matrix; stype = 1 reads the upper triangle.
-    cholmod_sparse view{};
-    view.nrow = view.ncol = static_cast<std::size_t>(matrix.rows());
-    view.nzmax = static_cast<std::size_t>(matrix.nonZeros());
-    view.p = const_cast<Index*>(matrix.outerIndexPtr());
-    view.i = const_cast<Index*>(matrix.innerIndexPtr());
-    view.x = const_cast<double*>(matrix.valuePtr());
-    view.stype = 1;
-    view.itype = CHOLMOD_INT;
-    view.xtype = CHOLMOD_REAL;
-    view.dtype = CHOLMOD_DOUBLE;
-    view.sorted = 0;  // no promise needed: CHOLMOD permutes (and so sorts) the matrix anyway
-    view.packed = 1;
-    factor_ = cholmod_analyze(&view, &common_);
-    if (!factor_ || common_.status < CHOLMOD_OK) fail("cholmod_analyze");
-    if (!cholmod_factorize(&view, factor_, &common_) || common_.status != CHOLMOD_OK) {
-      if (common_.status == CHOLMOD_NOT_POSDEF) {
-        throw SolverError("ARPACK eigen-solve: CHOLMOD found K - sigma M not positive definite "
-                          "(pivot at column " + std::to_string(factor_->minor) + " of " +
-                          std::to_string(matrix.rows()) + ")");
-      }
-      fail("cholmod_factorize");
-    }
-    rhs_.nrow = rhs_.d = rhs_.nzmax = static_cast<std::size_t>(matrix.rows());
-    rhs_.ncol = 1;
-    rhs_.xtype = CHOLMOD_REAL;
-    rhs_.dtype = CHOLMOD_DOUBLE;
-  }
-  ~CholmodFactor() {
-    cholmod_free_dense(&solution_, &common_);
-    cholmod_free_dense(&work_y_, &common_);
-    cholmod_free_dense(&work_e_, &common_);
-    cholmod_free_factor(&factor_, &common_);
-    cholmod_finish(&common_);
-  }
-  CholmodFactor(const CholmodFactor&) = delete;
-  CholmodFactor& operator=(const CholmodFactor&) = delete;
-
-  /// y = A^{-1} x (x and y of length n, may not alias).
-  void solve(const double* x, double* y) {
-    rhs_.x = const_cast<double*>(x);
-    if (!cholmod_solve2(CHOLMOD_A, factor_, &rhs_, nullptr, &solution_, nullptr, &work_y_,
-                        &work_e_, &common_)) {
-      fail("cholmod_solve2");
-    }
-    const auto* values = static_cast<const double*>(solution_->x);
-    std::copy(values, values + rhs_.nrow, y);
-  }
-
- private:
-  [[noreturn]] void fail(const char* what) {
-    throw SolverError(std::string("ARPACK eigen-solve: ") + what + " failed (CHOLMOD status " +
-                      std::to_string(common_.status) + ")");
-  }
-
-  cholmod_common common_{};
-  cholmod_factor* factor_ = nullptr;
-  cholmod_dense rhs_{};
-  cholmod_dense* solution_ = nullptr;
-  cholmod_dense* work_y_ = nullptr;
-  cholmod_dense* work_e_ = nullptr;
-};
 
 /// y = A x for a CSR matrix, sequential: one product per Lanczos step is memory-bound, and
 /// Eigen's OpenMP split of it stalls whenever another process holds a core.
@@ -157,7 +85,7 @@ EigenPairs solve_eigenpairs_arpack(const SparseMatrix& stiffness, const SparseMa
 
   Stopwatch watch;
   const SparseMatrix shifted = stiffness - options.shift * mass;
-  CholmodFactor factor(shifted);
+  CholmodFactor factor(shifted, "ARPACK eigen-solve");
   result.factorization_s = watch.seconds();
 
   watch.restart();
