@@ -178,6 +178,14 @@ Model build_model(const scene::Scene& scene) {
                        (section.face.empty() ? "group " : "face ") + set + ")";
     model.dirichlet.push_back(std::move(condition));
   }
+  if (scene.transient && scene.transient->excitation && !scene.transient->excitation->group.empty()) {
+    const std::string& group = scene.transient->excitation->group;
+    const auto found = model.mesh.node_sets.find(group);
+    if (found == model.mesh.node_sets.end() || found->second.empty()) {
+      throw InputError(where(scene, 0) + "transient.excitation.group: expected a group of the mesh (" +
+                       mesh::group_names(model.mesh) + "), got '" + group + "'");
+    }
+  }
   return model;
 }
 

@@ -151,14 +151,7 @@ void run_run_command(const RunCommandOptions& options, std::ostream& out) {
     transient::ExternalLoad load;
     load.name = "transient.excitation";
     if (!excitation.face.empty()) load.faces = model.mesh.face_sets.at(excitation.face);
-    if (!excitation.group.empty()) {
-      auto found = model.mesh.node_sets.find(excitation.group);
-      if (found == model.mesh.node_sets.end()) {
-        throw InputError(scene.file + ": transient.excitation.group: expected a group of the mesh, got '" +
-                         excitation.group + "'");
-      }
-      load.nodes = found->second;
-    }
+    if (!excitation.group.empty()) load.nodes = model.mesh.node_sets.at(excitation.group);  // checked by build_model
     if (excitation.point) load.nodes = {transient::nearest_node(model.mesh, *excitation.point)};
     load.direction = Vec3::Unit(excitation.direction);
     load.amplitude = excitation.amplitude;

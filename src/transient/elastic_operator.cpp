@@ -214,6 +214,9 @@ struct ElasticOperator::Impl {
   std::vector<Index> batch_elements;     ///< kLanes per batch (padding lanes repeat the first)
   std::vector<char> batch_lattice;       ///< per batch: full, order 1, nodes consecutive along x
 
+  // Assembled K (tetrahedral meshes): CSR over all DOFs, applied row by row.
+  SparseMatrix matrix;
+
   // General kernel.
   std::vector<fem::VoigtMatrix> stiffness;  ///< per region
   std::vector<int> region;
@@ -623,9 +626,16 @@ ElasticOperator::ElasticOperator(const mesh::Mesh& mesh, const mesh::DofMap& dof
                                  const ElasticOperatorOptions& options)
     : impl_(std::make_unique<Impl>()) {
   if (mesh.shape != mesh::ElementShape::hexahedron) {
-    // The matrix-free kernels are written for GLL hexahedra (sum factorisation, brick cache).
-    throw InputError(std::string("transient runs need hexahedral elements; this mesh has ") +
-                     mesh::shape_name(mesh.shape) + "s (use 8- or 27-node hexahedra; tetrahedra work for modal)");
+    // Tetrahedra: the kernels below are written for GLL hexahedra (sum factorisation, brick
+    // cache), so K is assembled once and applied as a sparse matrix.
+    Impl& impl = *impl_;
+    impl.n_dofs = dofs.n_dofs();
+    impl.matrix = fem::assemble_stiffness(mesh, dofs, materials);
+    impl.info.kernel = "assembled";
+    impl.info.n_elements = mesh.n_elements();
+    impl.info.n_dofs = impl.n_dofs;
+    impl.info.element_multiply_adds = impl.matrix.nonZeros() / std::max<Index>(1, mesh.n_elements());
+    return;
   }
   Impl& impl = *impl_;
   impl.order = mesh.order;
@@ -862,6 +872,19 @@ void ElasticOperator::apply_add(double scale, const VectorX& x, VectorX& y) cons
   }
   const double* in = x.data();
   double* out = y.data();
+  if (impl.matrix.rows() > 0) {
+    const Index* outer = impl.matrix.outerIndexPtr();
+    const Index* inner = impl.matrix.innerIndexPtr();
+    const double* values = impl.matrix.valuePtr();
+    const bool parallel = omp_get_max_threads() > 1 && impl.n_dofs >= kParallelMinimumDofs;
+#pragma omp parallel for schedule(static) if (parallel)
+    for (Index row = 0; row < impl.n_dofs; ++row) {
+      double sum = 0.0;
+      for (Index k = outer[row]; k < outer[row + 1]; ++k) sum += values[k] * in[inner[k]];
+      out[row] += scale * sum;
+    }
+    return;
+  }
   const Index n_chunks = static_cast<Index>(impl.chunk_begin.size()) - 1;
   const std::size_t scratch_size = impl.scratch_size();
   auto run_chunk = [&](Index c, double* scratch) {

@@ -2,7 +2,7 @@
 /// \file Matrix-free internal forces f_int = K u, MODEL.md eq. (25a), element by element without
 /// assembling K (an operator is an action, STYLE.md: interchangeable with an assembled matrix).
 ///
-/// Two kernels, chosen at construction:
+/// Three kernels, chosen at construction:
 /// - **brick**: for meshes of axis-aligned bricks (mesh.axis_aligned_bricks), the element matrix
 ///   depends only on (hx, hy, hz, region); it is computed once per distinct brick (sizes equal to
 ///   1e-10 relative) with fem::element_stiffness. If the material is invariant under the three
@@ -17,6 +17,8 @@
 /// - **general**: any hexahedra: sum factorisation on the (p+1)^3 Gauss points (the quadrature of
 ///   fem::element_stiffness), with the inverse Jacobian and w det J of every Gauss point stored
 ///   (10 doubles per point); checks that every Jacobian is positive.
+/// - **assembled**: tetrahedral meshes (4- and 10-node): K assembled once by fem::assemble_stiffness
+///   and applied as a CSR matrix, rows split over the threads.
 ///
 /// Threads (OpenMP, omp_get_max_threads() at the call): the elements are cut into chunks of
 /// consecutive elements, and the chunks coloured so that no two chunks of a colour share a DOF
@@ -41,7 +43,7 @@ struct ElasticOperatorOptions {
 
 /// What the operator chose, for logs and benchmarks.
 struct ElasticOperatorInfo {
-  std::string kernel;        ///< "brick-blocked", "brick-dense" or "general"
+  std::string kernel;        ///< "brick-blocked", "brick-dense", "general" or "assembled"
   std::string instruction_set = "baseline";  ///< build of the brick kernel in use: "avx512", "avx2", "baseline"
   Index n_elements = 0;
   Index n_dofs = 0;

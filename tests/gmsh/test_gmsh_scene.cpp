@@ -92,6 +92,11 @@ TEST(GmshScene, MissingGroupsAndWrongCombinations) {
   write_scene("test-scene-bad.yaml", "mesh: {gmsh: box-hex8.msh}\n" + kMaterial + "crack: {group: crak}\n");
   EXPECT_EQ(build_error(path), path + ": mesh.gmsh: " + scratch("box-hex8.msh") +
                                    ": crack: no physical group 'crak' (the file has: body, bottom, clamp, corner, load)");
+  write_scene("test-scene-bad.yaml", "mesh: {gmsh: box-hex8.msh}\n" + kMaterial +
+                                         "transient:\n  excitation: {group: lod, direction: z, amplitude: 1.0, "
+                                         "frequency: 100.0}\n  duration: 0.01\n");
+  EXPECT_EQ(build_error(path), path + ": transient.excitation.group: expected a group of the mesh (body, bottom, "
+                                      "clamp, corner, load), got 'lod'");
   write_scene("test-scene-bad.yaml", "mesh: {gmsh: nothing.msh}\n" + kMaterial);
   EXPECT_EQ(build_error(path), path + ": mesh.gmsh: " + scratch("nothing.msh") +
                                    ": expected a readable Gmsh mesh file, got No such file or directory");
