@@ -71,7 +71,14 @@ double mode_frequency(const modal::ModalResult& result, int mode, const std::str
       throw InputError(key + ": mode " + std::to_string(mode) + " asked, but only " +
                        std::to_string(result.pairs.size()) + " modes were paired (raise modal.modes)");
     }
-    return result.pairs[index].f_bilinear_hz;
+    const modal::ModePair& pair = result.pairs[index];
+    if (!pair.paired) {
+      throw InputError(key + ": mode " + std::to_string(mode) + " has no open partner among the " +
+                       std::to_string(result.mac.cols()) + " open modes computed (best MAC " +
+                       format_number(pair.mac) + " < " + format_number(modal::kPairingMac) +
+                       "), so its bilinear frequency is undefined (raise modal.modes)");
+    }
+    return pair.f_bilinear_hz;
   }
   const modal::VariantResult* variant =
       result.find(of == "open" ? mesh::Variant::open : mesh::Variant::uncracked);

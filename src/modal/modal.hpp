@@ -124,7 +124,15 @@ struct ModePair {
   double ratio = 0.0;  ///< f_open / f_uncracked
   double mac = 0.0;
   double f_bilinear_hz = 0.0;  ///< 2 f_u f_o / (f_u + f_o)
+  /// MAC >= kPairingMac: the open mode is the uncracked mode's partner. Below it, the partner is
+  /// not among the open modes computed (open-only local modes took their places: ask for more
+  /// modes) and ratio and f_bilinear mean nothing.
+  bool paired = true;
 };
+
+/// Smallest MAC of a pair taken as the same mode shape (correlation practice: 0.9 and above is a
+/// clear match, below 0.5 a different shape).
+constexpr double kPairingMac = 0.5;
 
 struct ModalResult {
   ModalOptions options;
@@ -151,7 +159,8 @@ MatrixX mac_matrix(const MatrixX& a, const MatrixX& b, const SparseMatrix* weigh
 MatrixX open_on_uncracked_dofs(const MatrixX& open_shapes, const VariantResult& open,
                                const VariantResult& uncracked);
 
-/// Pairs each uncracked mode to a distinct open mode, greedily by largest MAC.
+/// Pairs each uncracked mode to a distinct open mode, greedily by largest MAC; pairs below
+/// kPairingMac are marked unpaired.
 std::vector<ModePair> pair_modes(const VectorX& f_uncracked, const VectorX& f_open, const MatrixX& mac);
 
 /// Displacement of every mesh node (3 per node, node-major) of elastic mode `mode`, zero at

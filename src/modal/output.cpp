@@ -72,7 +72,8 @@ nlohmann::json modal_json(const ModalResult& result) {
                      {"f_open_hz", pair.f_open_hz},
                      {"ratio", pair.ratio},
                      {"mac", pair.mac},
-                     {"f_bilinear_hz", pair.f_bilinear_hz}});
+                     {"f_bilinear_hz", pair.f_bilinear_hz},
+                     {"paired", pair.paired}});
   }
   document["pairs"] = pairs;
   json mac = json::array();  // MAC[uncracked mode][open mode], for spotting mode mixing
@@ -104,14 +105,20 @@ nlohmann::json modal_json(const ModalResult& result) {
 
 std::string modal_table(const ModalResult& result) {
   std::string text;
+  int unpaired = 0;
   if (!result.pairs.empty()) {
     text += " mode  f_uncracked [Hz]      f_open [Hz]  open#    ratio      MAC  f_bilinear [Hz]\n";
     for (const ModePair& pair : result.pairs) {
       char line[200];
-      std::snprintf(line, sizeof line, "%5d %17.6g %16.6g %6d %8.5f %8.4f %16.6g\n", pair.uncracked_mode + 1,
+      std::snprintf(line, sizeof line, "%5d %17.6g %16.6g %6d %8.5f %8.4f %16.6g%s\n", pair.uncracked_mode + 1,
                     pair.f_uncracked_hz, pair.f_open_hz, pair.open_mode + 1, pair.ratio, pair.mac,
-                    pair.f_bilinear_hz);
+                    pair.f_bilinear_hz, pair.paired ? "" : "  unpaired");
       text += line;
+      unpaired += !pair.paired;
+    }
+    if (unpaired > 0) {
+      text += "(unpaired: MAC below " + format("%.1f", kPairingMac) +
+              ", the open partner is not among the modes computed; raise modal.modes)\n";
     }
   } else {
     text += " mode";
@@ -144,7 +151,7 @@ void write_modal_outputs(const std::filesystem::path& directory, const mesh::Mes
 
   io::CsvTable table;
   if (!result.pairs.empty()) {
-    std::vector<double> mode, f_u, open_mode, f_o, ratio, mac, f_b;
+    std::vector<double> mode, f_u, open_mode, f_o, ratio, mac, f_b, paired;
     for (const ModePair& pair : result.pairs) {
       mode.push_back(pair.uncracked_mode + 1);
       f_u.push_back(pair.f_uncracked_hz);
@@ -153,6 +160,7 @@ void write_modal_outputs(const std::filesystem::path& directory, const mesh::Mes
       ratio.push_back(pair.ratio);
       mac.push_back(pair.mac);
       f_b.push_back(pair.f_bilinear_hz);
+      paired.push_back(pair.paired ? 1.0 : 0.0);
     }
     table.add("mode [-]", mode);
     table.add("f_uncracked [Hz]", f_u);
@@ -161,6 +169,7 @@ void write_modal_outputs(const std::filesystem::path& directory, const mesh::Mes
     table.add("ratio [-]", ratio);
     table.add("mac [-]", mac);
     table.add("f_bilinear [Hz]", f_b);
+    table.add("paired [-]", paired);
   } else if (!result.variants.empty()) {
     std::vector<double> mode;
     for (int i = 0; i < result.variants.front().modes.n_modes(); ++i) mode.push_back(i + 1);

@@ -239,6 +239,7 @@ std::vector<ModePair> pair_modes(const VectorX& f_uncracked, const VectorX& f_op
     pair.ratio = pair.f_open_hz / pair.f_uncracked_hz;
     pair.mac = mac(best_row, best_column);
     pair.f_bilinear_hz = 2.0 * pair.f_uncracked_hz * pair.f_open_hz / (pair.f_uncracked_hz + pair.f_open_hz);
+    pair.paired = pair.mac >= kPairingMac;
     pairs.push_back(pair);
   }
   std::sort(pairs.begin(), pairs.end(),

@@ -146,3 +146,23 @@ TEST(Run, SceneWithoutTransientIsAClearError) {
   const int status = std::system(command.c_str());
   EXPECT_EQ(WEXITSTATUS(status), 2);
 }
+
+/// With 8 modes, uncracked mode 7 of the delaminated plate has no open partner (two local modes
+/// of the delaminated ply took open places 5 and 7): a frequency relative to its bilinear
+/// frequency is refused instead of taken from a mismatched pair.
+TEST(Run, BilinearFrequencyOfAnUnpairedModeIsAClearError) {
+  const std::string command = std::string(CRACKLE_BINARY_DIR) + "/apps/crackle run " + CRACKLE_SOURCE_DIR +
+                              "/data/composite-plate.yaml -o " + (scratch() / "unpaired").string() +
+                              " -q --set modal.modes=8 --set transient.excitation.frequency.mode=7 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::array<char, 4096> buffer;
+  std::string text;
+  while (std::fgets(buffer.data(), buffer.size(), pipe)) text += buffer.data();
+  const int status = pclose(pipe);
+  EXPECT_EQ(WEXITSTATUS(status), 2) << text;
+  EXPECT_NE(text.find("transient.excitation.frequency.mode: mode 7 has no open partner among the 8 open modes "
+                      "computed"),
+            std::string::npos)
+      << text;
+  EXPECT_FALSE(fs::exists(scratch() / "unpaired" / "transient.json"));
+}

@@ -231,6 +231,21 @@ TEST(Eigensolver, MacOfIdenticalAndOrthogonalShapes) {
   EXPECT_EQ(pairs[1].open_mode, 1);
   EXPECT_NEAR(pairs[0].f_bilinear_hz, 2.0 * 10 * 8 / 18.0, 1e-12);
   EXPECT_NEAR(pairs[0].ratio, 0.8, 1e-15);
+  EXPECT_TRUE(pairs[0].paired);
+  EXPECT_TRUE(pairs[1].paired);  // MAC 0.5: the threshold itself still pairs
+}
+
+/// An uncracked mode whose open partner was not computed takes a leftover open mode with a low
+/// MAC: it is reported unpaired, not as a frequency ratio.
+TEST(Eigensolver, LowMacPairIsMarkedUnpaired) {
+  MatrixX mac(2, 2);
+  mac << 0.98, 0.01, 0.02, 0.09;
+  const std::vector<ModePair> pairs = pair_modes(VectorX::LinSpaced(2, 10.0, 20.0), VectorX::LinSpaced(2, 9.0, 15.0), mac);
+  ASSERT_EQ(pairs.size(), 2u);
+  EXPECT_TRUE(pairs[0].paired);
+  EXPECT_EQ(pairs[1].open_mode, 1);
+  EXPECT_FALSE(pairs[1].paired);
+  EXPECT_DOUBLE_EQ(pairs[1].mac, 0.09);
 }
 
 }  // namespace

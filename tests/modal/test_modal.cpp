@@ -326,6 +326,7 @@ TEST(ModalOutput, WritesJsonCsvVtuAndTable) {
   ASSERT_EQ(document["pairs"].size(), 4u);
   EXPECT_EQ(document["pairs"][0]["uncracked_mode"].get<int>(), 1);
   EXPECT_TRUE(document["pairs"][0].contains("f_bilinear_hz"));
+  EXPECT_TRUE(document["pairs"][0]["paired"].get<bool>());
   EXPECT_EQ(document["solver"]["backend"], "slepc");
   EXPECT_TRUE(document["timings_s"].contains("factorization"));
   EXPECT_TRUE(document["timings_s"].contains("iterations"));
@@ -333,7 +334,7 @@ TEST(ModalOutput, WritesJsonCsvVtuAndTable) {
   std::ifstream csv(directory / "modes.csv");
   std::string header;
   std::getline(csv, header);
-  EXPECT_EQ(header, "mode [-],f_uncracked [Hz],open_mode [-],f_open [Hz],ratio [-],mac [-],f_bilinear [Hz]");
+  EXPECT_EQ(header, "mode [-],f_uncracked [Hz],open_mode [-],f_open [Hz],ratio [-],mac [-],f_bilinear [Hz],paired [-]");
   for (const char* name : {"modes_uncracked.vtu", "modes_open.vtu"}) {
     EXPECT_GT(std::filesystem::file_size(directory / name), 1000u) << name;
   }
