@@ -12,7 +12,7 @@
 #                    (default /tmp/depth-study; STUDY_TIME=file with its /usr/bin/time output).
 # Every table is preceded by the load average at its start: the figures are best-of-N wall times
 # on whatever machine runs this, so compare them only with that load in mind.
-# Compute (2 loaded cores, 2026-11-22): assembly ~0.5 min, modal ~5 min (+6 with BENCH_LARGE),
+# Compute (2 loaded cores, 2026-11-22): assembly ~0.5 min, modal ~5 min (+3 with BENCH_LARGE, quiet),
 # transient ~7 min, spectrum ~6 min.
 set -euo pipefail
 cd "$(dirname "$0")/.."
