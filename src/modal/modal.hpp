@@ -41,7 +41,8 @@ struct ModalOptions {
   std::optional<double> shift;
   double shift_fraction = 1e-10;
   /// A mode is rigid when |f| < rigid_tolerance * f_ref, f_ref = sqrt(lambda_ref) / (2 pi),
-  /// lambda_ref = tr K / tr M (the mean eigenvalue of the discrete pencil).
+  /// lambda_ref = tr K / tr M (the mean eigenvalue of the discrete pencil), and its eigenvalue is
+  /// at least 1e6 times below the largest one computed (see solve_modes).
   double rigid_tolerance = 1e-6;
   MacWeighting mac = MacWeighting::mass;
   /// If not empty: the uncracked solve is looked up in (and stored into) this folder, keyed by a
