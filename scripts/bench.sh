@@ -56,6 +56,10 @@ if want modal; then
   sed "s#set output .*#set output 'docs/img/modal-work-precision.png'#" "$out/modal-wp/modal_wp.gp" | gnuplot
   echo
   echo "Plot: docs/img/modal-work-precision.png"
+  echo
+  echo "### Modal work-precision, open crack on graded meshes (bench/modal_graded.py)"
+  load
+  python3 bench/modal_graded.py "$crackle" "$out/modal-graded"
 fi
 
 if want modal || want modal-scale; then
