@@ -12,6 +12,7 @@
 
 #include "core/errors.hpp"
 #include "scene/schema.hpp"
+#include "scene/yaml_text.hpp"
 
 namespace crackle::study {
 namespace {
@@ -27,66 +28,12 @@ std::string join(const std::vector<std::string>& words, const std::string& separ
   return text;
 }
 
-int line_of(const YAML::Node& node) {
-  const int line = node.Mark().line;
-  return line >= 0 ? line + 1 : -1;
-}
+using scene::describe_node;
+using scene::is_quoted;
+using scene::parse_number;
+using scene::suggestion;
 
-bool is_quoted(const YAML::Node& node) { return node.Tag() == "!"; }
-
-bool parse_number(const std::string& text, double& value) {
-  if (text.empty()) return false;
-  char* end = nullptr;
-  errno = 0;
-  value = std::strtod(text.c_str(), &end);
-  return end == text.c_str() + text.size() && errno == 0 && std::isfinite(value);
-}
-
-/// How a message shows a node: "0.5", "'abc'", "a map", "a list of 2 entries".
-std::string describe_node(const YAML::Node& node) {
-  if (!node.IsDefined() || node.IsNull()) return "nothing";
-  if (node.IsSequence()) {
-    if (node.size() == 0) return "an empty list";
-    return "a list of " + std::to_string(node.size()) + (node.size() == 1 ? " entry" : " entries");
-  }
-  if (node.IsMap()) return "a map";
-  double value = 0;
-  if (!is_quoted(node) && parse_number(node.Scalar(), value)) return format_number(value);
-  return "'" + node.Scalar() + "'";
-}
-
-std::size_t edit_distance(const std::string& a, const std::string& b) {
-  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
-  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
-  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t cost = std::tolower(static_cast<unsigned char>(a[i - 1])) ==
-                                       std::tolower(static_cast<unsigned char>(b[j - 1]))
-                                   ? 0
-                                   : 1;
-      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
-      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
-        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
-    }
-  }
-  return d[a.size()][b.size()];
-}
-
-/// " (did you mean 'x'?)" for the closest candidate within a third of the length, or "".
-std::string suggestion(const std::string& word, const std::vector<std::string>& candidates,
-                       const std::string& prefix = "") {
-  std::string best;
-  std::size_t best_distance = std::string::npos;
-  for (const std::string& candidate : candidates) {
-    const std::size_t distance = edit_distance(word, candidate);
-    if (distance <= std::max(word.size(), candidate.size()) / 3 && distance < best_distance) {
-      best = candidate;
-      best_distance = distance;
-    }
-  }
-  return best.empty() ? "" : " (did you mean '" + prefix + best + "'?)";
-}
+using scene::mark_line;
 
 [[noreturn]] void fail(const std::string& file, int line, const std::string& path,
                        const std::string& expected, const std::string& got) {
@@ -144,34 +91,8 @@ YAML::Node copy_of(const YAML::Node& node) { return YAML::Clone(node); }
 
 // ---- key paths
 
-struct PathStep {
-  std::string key;  ///< empty for an index
-  std::size_t index = 0;
-};
-
-bool split_path(const std::string& path, std::vector<PathStep>& steps) {
-  std::size_t i = 0;
-  while (i < path.size()) {
-    const std::size_t start = i;
-    while (i < path.size() && (std::isalnum(static_cast<unsigned char>(path[i])) || path[i] == '_' ||
-                               path[i] == '-' || path[i] == '+'))
-      ++i;
-    if (i == start) return false;
-    steps.push_back({path.substr(start, i - start), 0});
-    while (i < path.size() && path[i] == '[') {
-      const std::size_t close = path.find(']', i);
-      if (close == std::string::npos || close == i + 1) return false;
-      const std::string digits = path.substr(i + 1, close - i - 1);
-      if (!std::all_of(digits.begin(), digits.end(), [](unsigned char c) { return std::isdigit(c); }))
-        return false;
-      steps.push_back({"", std::stoul(digits)});
-      i = close + 1;
-    }
-    if (i < path.size() && (path[i] != '.' || i + 1 == path.size())) return false;
-    if (i < path.size()) ++i;
-  }
-  return !steps.empty();
-}
+using scene::PathStep;
+using scene::split_path;
 
 std::vector<std::string> child_names(const Param& param) {
   std::vector<std::string> names;
@@ -205,7 +126,7 @@ std::vector<std::pair<std::string, Entry>> entries_of(const YAML::Node& map, con
   std::vector<std::pair<std::string, Entry>> entries;
   std::set<std::string> seen;
   for (const auto& entry : map) {
-    const int line = line_of(entry.first);
+    const int line = mark_line(entry.first);
     const std::string key_path = path + "." + entry.first.Scalar();
     if (!entry.first.IsScalar()) fail(file, line, path, "keys that are words", describe_node(entry.first));
     const std::string& key = entry.first.Scalar();
@@ -408,7 +329,7 @@ StudySpec parse_study_section(const std::string& text, const std::string& file) 
   for (const auto& entry : document) {
     if (entry.first.Scalar() == "study") {
       study = entry.second;
-      spec.line = line_of(entry.first);
+      spec.line = mark_line(entry.first);
     }
   }
   if (spec.line < 0) return spec;
