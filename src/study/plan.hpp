@@ -9,6 +9,7 @@
 ///     modal.mass: [consistent, lumped]                                      # a list of values
 ///   mode: grid                  # grid (cartesian product, first key slowest) | zip
 ///   outputs: [modal, spectrum]  # what each case runs: modal -> `crackle modal`, spectrum -> `crackle run`
+///                               # (both: `run` alone when the scene has modal:, it writes modal.json)
 /// ```
 /// The scene loader does not know `study:`; the section is parsed here, with the same
 /// `file:line: key.path: expected ..., got ...` messages, and blanked out of the text (lines kept)

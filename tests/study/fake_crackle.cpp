@@ -1,6 +1,7 @@
 // A stand-in for the `crackle` executable in study tests: `fake_crackle modal|run SCENE -o DIR
 // [--modal-cache C]` validates the scene like crackle does and writes modal.json (modal) or
-// spectrum.json and run.json (run) with the JSON contracts of the real commands, from closed-form
+// spectrum.json and run.json, and modal.json if the scene has a modal: section (run), with the
+// JSON contracts of the real commands, from closed-form
 // "frequencies" of the scene. Test hooks, by environment:
 //   CRACKLE_FAKE_MARKER    file to which each run appends "<command> <case folder> <parent pid>",
 //                          and each modal cache access "cache-solve|cache-hit <cache folder>"
@@ -106,13 +107,15 @@ int main(int argc, char** argv) {
                        {"f_bilinear_hz", 2 * f_u * f_o / (f_u + f_o)}});
     }
     crackle::io::ensure_directory(out);
-    if (command == "modal") {
+    // `crackle run` writes modal.json too when the scene has a modal: section.
+    if (command == "modal" || (command == "run" && scene.has_modal_section)) {
       json variants = {{"uncracked", {{"frequencies_hz", uncracked}}}};
       if (scene.crack) variants["open"] = {{"frequencies_hz", open}};
       crackle::io::write_json(
           out / "modal.json",
           {{"dofs", 123}, {"variants", variants}, {"pairs", scene.crack ? pairs : json::array()}});
-    } else if (command == "run") {
+    }
+    if (command == "run") {
       const double excitation = 0.5 * pairs.at(0)["f_bilinear_hz"].get<double>();
       const double a1 = 1e-6, a2 = a1 * 0.2 * fraction, a3 = a1 * 0.05 * fraction,
                    a_half = a1 * 0.01 * fraction;
@@ -130,7 +133,7 @@ int main(int argc, char** argv) {
           {{"excitation_hz", excitation},
            {"probes", {{"tip", {{"component", "z"}, {"harmonics", harmonics}, {"indices", indices}}}}}});
       crackle::io::write_json(out / "run.json", {{"steps", 100}});
-    } else {
+    } else if (command != "modal") {
       throw crackle::InputError("unknown command '" + command + "'");
     }
     return 0;
