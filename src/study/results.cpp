@@ -143,13 +143,18 @@ json summarize_modal(const json& modal) {
   json pairs = json::array();
   if (modal.is_object() && modal.contains("pairs") && modal["pairs"].is_array()) {
     for (const json& pair : modal["pairs"]) {
+      // An unpaired mode (MAC below modal::kPairingMac) has no open partner: its ratio and
+      // bilinear frequency would be those of a mismatched pair, so the table leaves them empty.
+      const bool paired = !(pair.is_object() && pair.contains("paired") && pair["paired"] == false);
       pairs.push_back({{"uncracked_mode", number_field(pair, {"uncracked_mode", "mode"})},
                        {"open_mode", number_field(pair, {"open_mode"})},
                        {"f_uncracked_hz", number_field(pair, {"f_uncracked_hz", "uncracked_hz"})},
                        {"f_open_hz", number_field(pair, {"f_open_hz", "open_hz"})},
-                       {"ratio", number_field(pair, {"ratio"})},
+                       {"ratio", paired ? number_field(pair, {"ratio"}) : json(nullptr)},
                        {"mac", number_field(pair, {"mac", "MAC"})},
-                       {"bilinear_hz", number_field(pair, {"f_bilinear_hz", "bilinear_hz", "f_b_hz"})}});
+                       {"bilinear_hz", paired ? number_field(pair, {"f_bilinear_hz", "bilinear_hz", "f_b_hz"})
+                                              : json(nullptr)},
+                       {"paired", paired}});
     }
   }
   summary["pairs"] = pairs;

@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "core/errors.hpp"
+#include "study/results.hpp"
 #include "study/study.hpp"
 
 namespace crackle::study {
@@ -383,6 +384,23 @@ TEST(StudyRun, BadOverrideFailsBeforeAnythingRuns) {
   std::ofstream(workspace.scene) << kBase << "study:\n  vary:\n    material.young: [200e9]\n";
   EXPECT_THROW(run_quietly(options_for(workspace, "out", 2)), InputError);
   EXPECT_FALSE(fs::exists(workspace.root / "out"));
+}
+
+TEST(StudyResults, UnpairedModesLeaveRatioAndBilinearFrequencyEmpty) {
+  const json modal = json::parse(R"({"variants": {"uncracked": {"frequencies_hz": [100, 200]},
+                                                  "open": {"frequencies_hz": [90, 150]}},
+    "pairs": [{"uncracked_mode": 1, "open_mode": 1, "f_uncracked_hz": 100, "f_open_hz": 90, "ratio": 0.9,
+               "mac": 0.99, "f_bilinear_hz": 94.7, "paired": true},
+              {"uncracked_mode": 2, "open_mode": 2, "f_uncracked_hz": 200, "f_open_hz": 150, "ratio": 0.75,
+               "mac": 0.08, "f_bilinear_hz": 171.4, "paired": false}]})");
+  const json summary = summarize_modal(modal);
+  ASSERT_EQ(summary["pairs"].size(), 2u);
+  EXPECT_EQ(summary["pairs"][0]["bilinear_hz"], 94.7);
+  EXPECT_EQ(summary["pairs"][0]["ratio"], 0.9);
+  EXPECT_TRUE(summary["pairs"][1]["bilinear_hz"].is_null());
+  EXPECT_TRUE(summary["pairs"][1]["ratio"].is_null());
+  EXPECT_EQ(summary["pairs"][1]["mac"], 0.08);  // the MAC says why
+  EXPECT_FALSE(summary["pairs"][1]["paired"].get<bool>());
 }
 
 TEST(StudyRun, RealCrackleWhenItHasTheModalCommand) {
