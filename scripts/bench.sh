@@ -59,7 +59,10 @@ if want modal; then
   echo
   echo "### Modal work-precision, open crack on graded meshes (bench/modal_graded.py)"
   load
-  python3 bench/modal_graded.py "$crackle" "$out/modal-graded"
+  python3 bench/modal_graded.py "$crackle" "$out/modal-graded" --uniform "$out/modal-wp/modal_wp.csv"
+  gnuplot "$out/modal-graded/modal_graded.gp" && cp "$out/modal-graded/modal_graded.png" docs/img/modal-graded.png
+  echo
+  echo "Plot: docs/img/modal-graded.png"
 fi
 
 if want modal || want modal-scale; then
