@@ -4,8 +4,9 @@
 /// theta = 1 / (lambda - sigma), so the eigenvalues lambda nearest sigma converge first.
 ///
 /// Two interchangeable backends:
-///  - SLEPc Krylov–Schur (EPSGHEP, STSINVERT, KSPPREONLY + PCCHOLESKY) over PETSC_COMM_WORLD with
-///    the matrices distributed by row ranges; sparse Cholesky by CHOLMOD or MUMPS;
+///  - SLEPc Krylov–Schur (EPSGHEP, STSINVERT, KSPPREONLY) over PETSC_COMM_WORLD with the matrices
+///    distributed by row ranges; sparse Cholesky by MUMPS (PCCHOLESKY) or, on one rank, by
+///    crackle's CHOLMOD factor (cholmod_factor.hpp) behind a PCSHELL with a shell ST operator;
 ///  - ARPACK dsaupd/dseupd in mode 3 (shift-invert, B = M) with a CHOLMOD factorisation of
 ///    K - sigma M, sequential (under MPI every rank solves the whole problem).
 #include <string>

@@ -2,12 +2,14 @@
 #include <slepceps.h>
 
 #include <algorithm>
+#include <memory>
 #include <numeric>
 #include <string>
 #include <vector>
 
 #include "core/errors.hpp"
 #include "core/resources.hpp"
+#include "modal/cholmod_factor.hpp"
 #include "modal/eigensolver.hpp"
 #include "modal/petsc_check.hpp"
 
@@ -134,6 +136,31 @@ SlepcSession::~SlepcSession() {
   if (owns_) SlepcFinalize();
 }
 
+namespace {
+
+/// PCSHELL application y = (K - sigma M)^{-1} x with crackle's CHOLMOD factor (one rank): the
+/// node-compressed ordering of cholmod_factor.hpp, which PETSc's own CHOLMOD interface does not
+/// use. Errors become PETSc error codes: nothing may unwind through PETSc's C frames.
+PetscErrorCode apply_cholmod_factor(PC pc, Vec x, Vec y) {
+  void* context = nullptr;
+  PetscErrorCode code = PCShellGetContext(pc, &context);
+  if (code) return code;
+  const PetscScalar* in = nullptr;
+  PetscScalar* out = nullptr;
+  if ((code = VecGetArrayRead(x, &in)) || (code = VecGetArray(y, &out))) return code;
+  PetscErrorCode result = 0;
+  try {
+    static_cast<CholmodFactor*>(context)->solve(in, out);
+  } catch (const std::exception& error) {
+    result = PetscError(PETSC_COMM_SELF, __LINE__, "apply_cholmod_factor", __FILE__, PETSC_ERR_LIB,
+                        PETSC_ERROR_INITIAL, "%s", error.what());
+  }
+  if ((code = VecRestoreArrayRead(x, &in)) || (code = VecRestoreArray(y, &out))) return code;
+  return result;
+}
+
+}  // namespace
+
 EigenPairs solve_eigenpairs_slepc(const SparseMatrix& stiffness, const SparseMatrix& mass,
                                   const EigenOptions& options) {
   if (!stiffness.isCompressed() || !mass.isCompressed()) {
@@ -194,8 +221,21 @@ EigenPairs solve_eigenpairs_slepc(const SparseMatrix& stiffness, const SparseMat
   CRACKLE_PETSC(kContext, STGetKSP(st, &ksp));
   CRACKLE_PETSC(kContext, KSPSetType(ksp, KSPPREONLY));
   CRACKLE_PETSC(kContext, KSPGetPC(ksp, &pc));
-  CRACKLE_PETSC(kContext, PCSetType(pc, PCCHOLESKY));
-  CRACKLE_PETSC(kContext, PCFactorSetMatSolverType(pc, package));
+  // CHOLMOD (one rank) is crackle's own factor behind a shell preconditioner; MUMPS goes through
+  // PETSc's interface.
+  std::unique_ptr<CholmodFactor> cholmod;
+  Stopwatch watch;
+  if (factorization == Factorization::cholmod) {
+    cholmod = std::make_unique<CholmodFactor>(SparseMatrix(stiffness - options.shift * mass), "SLEPc eigen-solve");
+    // KSPPREONLY never applies K - sigma M itself: a shell operator spares ST assembling it.
+    CRACKLE_PETSC(kContext, STSetMatMode(st, ST_MATMODE_SHELL));
+    CRACKLE_PETSC(kContext, PCSetType(pc, PCSHELL));
+    CRACKLE_PETSC(kContext, PCShellSetContext(pc, cholmod.get()));
+    CRACKLE_PETSC(kContext, PCShellSetApply(pc, apply_cholmod_factor));
+  } else {
+    CRACKLE_PETSC(kContext, PCSetType(pc, PCCHOLESKY));
+    CRACKLE_PETSC(kContext, PCFactorSetMatSolverType(pc, package));
+  }
   // Command-line / PETSC_OPTIONS overrides (-eps_view, -eps_ncv, ...).
   CRACKLE_PETSC(kContext, EPSSetFromOptions(eps));
 
@@ -203,10 +243,9 @@ EigenPairs solve_eigenpairs_slepc(const SparseMatrix& stiffness, const SparseMat
   result.n_ranks = size;
   result.factorization = factorization_name(factorization);
 
-  Stopwatch watch;
   CRACKLE_PETSC(kContext, EPSSetUp(eps));
-  CRACKLE_PETSC(kContext, KSPSetUp(ksp));  // the numeric factorisation of K - sigma M
-  {
+  CRACKLE_PETSC(kContext, KSPSetUp(ksp));  // the numeric factorisation of K - sigma M (MUMPS)
+  if (!cholmod) {
     // A failed factorisation (e.g. K - sigma M singular) is reported by PETSc only as a flag.
     Mat factor = nullptr;
     MatFactorError error = MAT_FACTOR_NOERROR;
