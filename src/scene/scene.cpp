@@ -603,6 +603,19 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
   return parse_scene(text.str(), path, overrides);
 }
 
+const Param& study_parameters() {
+  static const Param table = map_of("", "", {map_of("study", "Parameter study run by `crackle study` (check, modal and run ignore it).", {
+      map_of("vary", "Scene keys to vary, each by its key path (`crack.region.z`, `boundary[0].value`): a list of "
+                     "values, or {from, to, steps} for evenly spaced numbers or number lists.", {}).required(),
+      choice("mode", "grid: every combination of the values, the first key slowest; zip: the i-th values of every "
+                     "key together (lists of equal length).", {"grid", "zip"}).defaults_to("grid"),
+      choice("outputs", "What each case runs: modal -> `crackle modal`, spectrum -> `crackle run` (both, with a "
+                        "`modal:` section: `crackle run` alone, which writes modal.json too).",
+             {"modal", "spectrum"}).list(1, 2).distinct().defaults_to("[modal]"),
+  }).optional_section()});
+  return table;
+}
+
 std::string scene_format_markdown() {
   return "# Scene format\n\n"
          "<!-- Generated from the parameter table in src/scene/scene.cpp by scene_format_markdown(); do not "
@@ -616,7 +629,11 @@ std::string scene_format_markdown() {
          "study overrides any key by its path, e.g. `crack.region.z`. Every problem is reported on one line "
          "as\n"
          "`file:line: key.path: expected ..., got ...`.\n\n" +
-         markdown_table(scene_parameters());
+         markdown_table(scene_parameters()) +
+         "\n## Parameter study\n\n"
+         "`crackle study scene.yaml -o DIR` runs one case per combination of the values below, each a full "
+         "scene\n(validated like any other) in `DIR/cases/NNNN/`; `study.csv` and `study.json` collect them.\n\n" +
+         markdown_table(study_parameters());
 }
 
 }  // namespace crackle::scene

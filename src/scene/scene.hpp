@@ -179,6 +179,10 @@ Scene parse_scene(const std::string& text, const std::string& name, const std::v
 /// The parameter table of a scene file: every key, declared once (schema.hpp). A new section is
 /// one more entry here plus its conversion in scene.cpp.
 const Param& scene_parameters();
+/// A table whose one child is the `study:` section (read by the study plan, src/study/plan.cpp,
+/// not by load_scene): declared here so that docs/scene-format.md lists its keys and the plan
+/// takes its keys and choices from it.
+const Param& study_parameters();
 
 /// Markdown reference of every scene key, generated from the parameter table.
 std::string scene_format_markdown();

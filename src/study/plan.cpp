@@ -333,37 +333,41 @@ StudySpec parse_study_section(const std::string& text, const std::string& file) 
     }
   }
   if (spec.line < 0) return spec;
-  if (!study.IsMap())
-    fail(file, spec.line, "study", "a map with keys vary, mode, outputs", describe_node(study));
+  // Keys and choices as declared in scene::study_parameters() (which documents them).
+  const scene::Param& table = *scene::study_parameters().child("study");
+  const std::vector<std::string>& modes = table.child("mode")->choices;
+  const std::vector<std::string>& known = table.child("outputs")->choices;
+  std::vector<std::string> keys;
+  for (const scene::Param& child : table.children) keys.push_back(child.name);
+  if (!study.IsMap()) fail(file, spec.line, "study", "a map with keys " + join(keys, ", "), describe_node(study));
 
   Entry vary_entry, mode_entry, outputs_entry;  // line -1: absent
-  for (const auto& [key, entry] : entries_of(study, file, "study", {"vary", "mode", "outputs"}))
+  for (const auto& [key, entry] : entries_of(study, file, "study", keys))
     (key == "vary" ? vary_entry : key == "mode" ? mode_entry : outputs_entry) = entry;
   const YAML::Node &vary = vary_entry.value, &mode = mode_entry.value, &outputs = outputs_entry.value;
   const int vary_line = vary_entry.line, mode_line = mode_entry.line, outputs_line = outputs_entry.line;
 
   if (mode_line >= 0) {
-    if (!mode.IsScalar() || (mode.Scalar() != "grid" && mode.Scalar() != "zip"))
-      fail(file, mode_line, "study.mode", "one of grid, zip",
-           describe_node(mode) + (mode.IsScalar() ? suggestion(mode.Scalar(), {"grid", "zip"}) : ""));
+    if (!mode.IsScalar() || std::find(modes.begin(), modes.end(), mode.Scalar()) == modes.end())
+      fail(file, mode_line, "study.mode", "one of " + join(modes, ", "),
+           describe_node(mode) + (mode.IsScalar() ? suggestion(mode.Scalar(), modes) : ""));
     spec.mode = mode.Scalar() == "zip" ? StudyMode::zip : StudyMode::grid;
   }
 
   if (outputs_line >= 0) {
-    const std::vector<std::string> known = {"modal", "spectrum"};
     std::vector<YAML::Node> items;
     if (outputs.IsScalar()) items.push_back(outputs);
     if (outputs.IsSequence())
       for (const auto& item : outputs) items.push_back(item);
     if (items.empty())
-      fail(file, outputs_line, "study.outputs", "a list of entries from modal, spectrum",
+      fail(file, outputs_line, "study.outputs", "a list of entries from " + join(known, ", "),
            describe_node(outputs));
     std::set<std::string> chosen;
     for (std::size_t i = 0; i < items.size(); ++i) {
       const std::string item_path =
           "study.outputs" + (outputs.IsSequence() ? "[" + std::to_string(i) + "]" : "");
       if (!items[i].IsScalar() || std::find(known.begin(), known.end(), items[i].Scalar()) == known.end())
-        fail(file, outputs_line, item_path, "one of modal, spectrum",
+        fail(file, outputs_line, item_path, "one of " + join(known, ", "),
              describe_node(items[i]) + (items[i].IsScalar() ? suggestion(items[i].Scalar(), known) : ""));
       if (!chosen.insert(items[i].Scalar()).second)
         fail(file, outputs_line, item_path, "each entry at most once", describe_node(items[i]) + " again");
