@@ -84,8 +84,7 @@ EigenPairs solve_eigenpairs_arpack(const SparseMatrix& stiffness, const SparseMa
   result.factorization = "cholmod";
 
   Stopwatch watch;
-  const SparseMatrix shifted = stiffness - options.shift * mass;
-  CholmodFactor factor(shifted, "ARPACK eigen-solve");
+  CholmodFactor factor(stiffness, mass, options.shift, "ARPACK eigen-solve");
   result.factorization_s = watch.seconds();
 
   watch.restart();

@@ -68,8 +68,11 @@ std::vector<Index> CholmodFactor::compressed_ordering(const SparseMatrix& matrix
   return permutation;
 }
 
-CholmodFactor::CholmodFactor(const SparseMatrix& matrix, std::string context)
-    : context_(std::move(context)), rows_(matrix.rows()) {
+CholmodFactor::CholmodFactor(const SparseMatrix& stiffness, const SparseMatrix& mass, double shift,
+                             std::string context)
+    : context_(std::move(context)), rows_(stiffness.rows()) {
+  SparseMatrix matrix = stiffness - shift * mass;
+  matrix.makeCompressed();
   cholmod_start(&common_);
   common_.print = 0;
   common_.error_handler = nullptr;
@@ -79,14 +82,13 @@ CholmodFactor::CholmodFactor(const SparseMatrix& matrix, std::string context)
   view.nzmax = static_cast<std::size_t>(matrix.nonZeros());
   view.p = const_cast<Index*>(matrix.outerIndexPtr());
   view.i = const_cast<Index*>(matrix.innerIndexPtr());
-  view.nz = const_cast<Index*>(matrix.innerNonZeroPtr());
   view.x = const_cast<double*>(matrix.valuePtr());
   view.stype = 1;
   view.itype = CHOLMOD_INT;
   view.xtype = CHOLMOD_REAL;
   view.dtype = CHOLMOD_DOUBLE;
   view.sorted = 0;  // no promise needed: CHOLMOD permutes (and so sorts) the matrix anyway
-  view.packed = matrix.isCompressed() ? 1 : 0;
+  view.packed = 1;
   std::vector<Index> permutation = compressed_ordering(matrix);
   common_.nmethods = 1;
   common_.method[0].ordering = CHOLMOD_GIVEN;

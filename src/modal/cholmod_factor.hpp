@@ -1,7 +1,7 @@
 #pragma once
 /// \file Sparse Cholesky factorisation by CHOLMOD (supernodal, BLAS-3 through the system BLAS)
-/// of a symmetric positive definite CSR matrix, with solves. Used by the ARPACK
-/// backend (module-internal header).
+/// of the shift-invert matrix K - sigma M, with solves. Used by the ARPACK backend and by the
+/// SLEPc backend on one rank (module-internal header).
 #include <cholmod.h>
 
 #include <string>
@@ -13,10 +13,10 @@ namespace crackle::modal {
 
 class CholmodFactor {
  public:
-  /// Analyses (fill-reducing ordering of the compressed graph, see compressed_ordering) and factorises
-  /// `matrix` (full symmetric CSR; only its upper triangle is read). `context` prefixes every
-  /// error message (e.g. "ARPACK eigen-solve"). SolverError if A is not positive definite.
-  CholmodFactor(const SparseMatrix& matrix, std::string context);
+  /// Forms K - sigma M (full symmetric CSR, same size), analyses it (fill-reducing ordering of the
+  /// compressed graph, see compressed_ordering) and factorises it. `context` prefixes every error
+  /// message (e.g. "ARPACK eigen-solve"). SolverError if K - sigma M is not positive definite.
+  CholmodFactor(const SparseMatrix& stiffness, const SparseMatrix& mass, double shift, std::string context);
   ~CholmodFactor();
   CholmodFactor(const CholmodFactor&) = delete;
   CholmodFactor& operator=(const CholmodFactor&) = delete;

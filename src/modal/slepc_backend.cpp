@@ -226,7 +226,7 @@ EigenPairs solve_eigenpairs_slepc(const SparseMatrix& stiffness, const SparseMat
   std::unique_ptr<CholmodFactor> cholmod;
   Stopwatch watch;
   if (factorization == Factorization::cholmod) {
-    cholmod = std::make_unique<CholmodFactor>(SparseMatrix(stiffness - options.shift * mass), "SLEPc eigen-solve");
+    cholmod = std::make_unique<CholmodFactor>(stiffness, mass, options.shift, "SLEPc eigen-solve");
     // KSPPREONLY never applies K - sigma M itself: a shell operator spares ST assembling it.
     CRACKLE_PETSC(kContext, STSetMatMode(st, ST_MATMODE_SHELL));
     CRACKLE_PETSC(kContext, PCSetType(pc, PCSHELL));
