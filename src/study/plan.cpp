@@ -544,7 +544,7 @@ StudyPlan plan_study(const std::string& text, const std::string& file) {
     const std::string case_name = file + " " + case_folder(study_case.index) + "/scene.yaml";
     try {
       if (plan.shares_grid_lines) scene::parse_scene(plan.base_text, file, study_case.overrides);
-      scene::parse_scene(study_case.scene_text, case_name);
+      study_case.has_modal_section = scene::parse_scene(study_case.scene_text, case_name).has_modal_section;
     } catch (const InputError& error) {
       throw InputError(file + ": study: " + describe_case(study_case, spec.vary.size()) +
                        ": the case scene does not read back: " + error.what());

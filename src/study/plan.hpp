@@ -47,6 +47,7 @@ struct StudyCase {
   std::string hash;                        ///< of the scene (without its comment header) and the outputs
   std::string modal_key;    ///< hash of what the uncracked modal solve depends on: the modal cache key
   std::string primer_text;  ///< scene that solves just the uncracked modes of this key (may be empty)
+  bool has_modal_section = false;  ///< the scene has modal:, so `crackle run` writes modal.json too
 };
 
 struct StudyPlan {

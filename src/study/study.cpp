@@ -18,8 +18,6 @@
 #include <ostream>
 #include <thread>
 
-#include <yaml-cpp/yaml.h>
-
 #include "core/errors.hpp"
 #include "io/files.hpp"
 #include "study/plan.hpp"
@@ -248,8 +246,8 @@ Job StudyRun::case_job(int index) {
   // `crackle run` writes modal.json itself when the scene has a modal: section (the same variants,
   // at least as many modes), so a case that asks for both runs only `run`: one modal solve less.
   const auto& outputs = plan_.spec.outputs;
-  const bool run_writes_modal = std::count(outputs.begin(), outputs.end(), "spectrum") > 0 &&
-                                YAML::Load(study_case.scene_text)["modal"].IsMap();
+  const bool run_writes_modal =
+      study_case.has_modal_section && std::count(outputs.begin(), outputs.end(), "spectrum") > 0;
   for (const std::string& output : outputs) {
     if (output == "modal" && run_writes_modal) continue;
     const std::string command = output == "spectrum" ? "run" : "modal";
