@@ -3,6 +3,29 @@
 #include <cmath>
 
 namespace crackle::contact {
+namespace {
+
+/// Radial return onto the cone |t| <= limit (eq. 15): the traction, and true if it slips.
+bool radial_return(const Vec3& trial, double limit, Vec3& traction) {
+  const double trial_norm = trial.norm();
+  if (trial_norm <= limit) {
+    traction = trial;
+    return false;
+  }
+  traction = trial_norm > 0.0 ? Vec3(trial * (limit / trial_norm)) : Vec3::Zero();
+  return true;
+}
+
+/// Work absorbed over a slipping step by the midpoint rule, less the change of the stored energy
+/// |t|^2 / (2 eps_T). (In stick t_new = t_old - eps_T ds, and the two cancel exactly.)
+double slip_dissipation(const Vec3& old, const Vec3& traction, const Vec3& slip, double tangential_penalty) {
+  const double absorbed = -0.5 * (old + traction).dot(slip);
+  const double stored_change =
+      tangential_penalty > 0.0 ? 0.5 * (traction.squaredNorm() - old.squaredNorm()) / tangential_penalty : 0.0;
+  return absorbed - stored_change;
+}
+
+}  // namespace
 
 CoulombUpdate coulomb_return_mapping(const Vec3& traction_old, const Vec3& relative_increment,
                                      const Vec3& normal, double tangential_penalty,
@@ -13,22 +36,8 @@ CoulombUpdate coulomb_return_mapping(const Vec3& traction_old, const Vec3& relat
   const Vec3 trial = old - tangential_penalty * slip_increment;
   const double limit = friction_coefficient * std::max(pressure, 0.0);
   CoulombUpdate update;
-  const double trial_norm = trial.norm();
-  if (trial_norm <= limit) {
-    update.traction = trial;
-  } else {
-    update.slipping = true;
-    update.traction = trial_norm > 0.0 ? Vec3(trial * (limit / trial_norm)) : Vec3::Zero();
-  }
-  // Absorbed work by the midpoint rule less the change of the stored energy |t|^2 / (2 eps_T).
-  // In stick t_new = t_old - eps_T ds, and the two cancel exactly.
-  if (update.slipping) {
-    const double absorbed = -0.5 * (old + update.traction).dot(slip_increment);
-    const double stored_change = tangential_penalty > 0.0
-                                     ? 0.5 * (update.traction.squaredNorm() - old.squaredNorm()) / tangential_penalty
-                                     : 0.0;
-    update.dissipation = absorbed - stored_change;
-  }
+  update.slipping = radial_return(trial, limit, update.traction);
+  if (update.slipping) update.dissipation = slip_dissipation(old, update.traction, slip_increment, tangential_penalty);
   return update;
 }
 
@@ -46,20 +55,11 @@ PairResponse implicit_pair_response(double free_gap, const Vec3& free_increment,
   const Vec3 free_slip = tangential_part(free_increment, normal);
   const Vec3 trial = (old - tangential_penalty * free_slip) / (1.0 + tangential_penalty * tangential_compliance);
   const double limit = friction_coefficient * response.pressure;
-  const double trial_norm = trial.norm();
-  if (trial_norm <= limit) {
-    response.traction = trial;
-  } else {
-    response.slipping = true;
-    response.traction = trial_norm > 0.0 ? Vec3(trial * (limit / trial_norm)) : Vec3::Zero();
-    // Midpoint-rule absorbed work less the change of stored energy (zero in stick, as in
-    // coulomb_return_mapping), with the slip the traction actually produces.
+  response.slipping = radial_return(trial, limit, response.traction);
+  if (response.slipping) {
+    // With the slip the traction actually produces.
     const Vec3 slip = free_slip + tangential_compliance * response.traction;
-    const double absorbed = -0.5 * (old + response.traction).dot(slip);
-    const double stored_change = tangential_penalty > 0.0
-                                     ? 0.5 * (response.traction.squaredNorm() - old.squaredNorm()) / tangential_penalty
-                                     : 0.0;
-    response.dissipation = absorbed - stored_change;
+    response.dissipation = slip_dissipation(old, response.traction, slip, tangential_penalty);
   }
   return response;
 }
