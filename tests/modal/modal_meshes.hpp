@@ -33,4 +33,14 @@ inline fem::DirichletCondition fix(const mesh::Mesh& mesh, const std::string& fa
   return condition;
 }
 
+/// For a cantilever 1 x 0.1 x 0.2: an edge crack from the bottom (z = 0) to mid-depth at x = 0.3.
+inline mesh::CrackSpec edge_crack() {
+  mesh::CrackSpec crack;
+  crack.normal = kX;
+  crack.at = 0.3;
+  crack.region[kY] = {0.0, 0.1};
+  crack.region[kZ] = {0.0, 0.1};
+  return crack;
+}
+
 }  // namespace crackle::modal::testing

@@ -20,12 +20,7 @@ using namespace crackle;
 namespace {
 
 nlohmann::json analyse() {
-  mesh::CrackSpec crack;
-  crack.normal = kX;
-  crack.at = 0.3;
-  crack.region[kY] = {0.0, 0.1};
-  crack.region[kZ] = {0.0, 0.1};
-  const mesh::Mesh mesh = modal::testing::box_mesh(Vec3(1.0, 0.1, 0.2), {10, 1, 4}, 3, crack);
+  const mesh::Mesh mesh = modal::testing::box_mesh(Vec3(1.0, 0.1, 0.2), {10, 1, 4}, 3, modal::testing::edge_crack());
   modal::ModalOptions options;
   options.modes = 8;
   const modal::ModalResult result =

@@ -20,6 +20,7 @@ namespace crackle::modal {
 namespace {
 
 using testing::box_mesh;
+using testing::edge_crack;
 using testing::fix;
 using testing::steel;
 
@@ -163,15 +164,6 @@ TEST(ModalBlock, FreeBodyHasExactlySixRigidModesThenElasticOnes) {
   }
 }
 
-/// Cantilever 1 x 0.1 x 0.2 with an edge crack from the bottom (z = 0) to mid-depth at x = 0.3.
-mesh::CrackSpec edge_crack() {
-  mesh::CrackSpec crack;
-  crack.normal = kX;
-  crack.at = 0.3;
-  crack.region[kY] = {0.0, 0.1};
-  crack.region[kZ] = {0.0, 0.1};
-  return crack;
-}
 
 /// A clamped beam with grid lines graded geometrically (ratio 0.15, 8 layers) towards the line
 /// x = 0.05 m, z = 7 mm (where data/beam.yaml has its crack front):
