@@ -631,6 +631,7 @@ ElasticOperator::ElasticOperator(const mesh::Mesh& mesh, const mesh::DofMap& dof
     Impl& impl = *impl_;
     impl.n_dofs = dofs.n_dofs();
     impl.matrix = fem::assemble_stiffness(mesh, dofs, materials);
+    impl.matrix.makeCompressed();  // apply_add reads rows as outer[row] .. outer[row + 1]
     impl.info.kernel = "assembled";
     impl.info.n_elements = mesh.n_elements();
     impl.info.n_dofs = impl.n_dofs;
