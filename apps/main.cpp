@@ -2,7 +2,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
-#include "commands.hpp"
+#include "pipeline/commands.hpp"
 #include "modal/eigensolver.hpp"
 #include "core/errors.hpp"
 #include "scene/scene.hpp"
@@ -14,14 +14,14 @@ int main(int argc, char** argv) {
   cli.require_subcommand(1);
   cli.set_version_flag("--version", "crackle 0.1.0");
 
-  app::CheckOptions check;
+  pipeline::CheckOptions check;
   CLI::App* check_command = cli.add_subcommand(
       "check", "Validate a scene, mesh it, assemble K and the lumped mass, and print a summary");
   check_command->add_option("scene", check.scene_path, "Scene file (YAML)")->required();
   check_command->add_option("--set", check.overrides, "Override a scene value: --set key.path=value (repeatable)");
   check_command->add_flag("!--no-assembly", check.assemble, "Skip assembling K and M");
 
-  app::ModalCommandOptions modal;
+  pipeline::ModalCommandOptions modal;
   CLI::App* modal_command = cli.add_subcommand(
       "modal", "Eigenmodes of the uncracked (faces tied) and open-crack body, paired by MAC, with the "
                "bilinear frequency of each pair. PETSc/SLEPc options may follow, e.g. -eps_view");
@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
                             "Folder where the uncracked solve is looked up and stored (shared by study cases)");
   modal_command->allow_extras();
 
-  app::RunCommandOptions run;
+  pipeline::RunCommandOptions run;
   bool quiet = false;
   CLI::App* run_command = cli.add_subcommand(
       "run", "The scene's pipeline: modal (only if a mode is referred to or modal: is given) -> transient "
@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
     return cli.exit(error);
   }
   try {
-    if (*check_command) app::run_check(check, std::cout);
+    if (*check_command) pipeline::run_check(check, std::cout);
     if (*modal_command) {
       // PETSc sees only the arguments CLI11 did not take (e.g. -eps_view), and PETSC_OPTIONS.
       std::vector<std::string> extras = modal_command->remaining();
@@ -81,7 +81,7 @@ int main(int argc, char** argv) {
       petsc_argv.push_back(nullptr);  // MPI expects argv[argc] == NULL
       char** petsc_args = petsc_argv.data();
       modal::SlepcSession session(&petsc_argc, &petsc_args);
-      app::run_modal_command(modal, std::cout);
+      pipeline::run_modal_command(modal, std::cout);
     }
     if (*run_command) {
       run.progress = !quiet;
@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
       petsc_argv.push_back(nullptr);
       char** petsc_args = petsc_argv.data();
       modal::SlepcSession session(&petsc_argc, &petsc_args);
-      app::run_run_command(run, std::cout);
+      pipeline::run_run_command(run, std::cout);
     }
     if (*study_command) {
       study_options.modal_cache = !no_modal_cache;

@@ -3,12 +3,14 @@
 #include "modal/cache.hpp"
 
 #include <algorithm>
+#include <map>
 #include <cmath>
 #include <numeric>
 #include <string>
 
 #include "core/errors.hpp"
 #include "core/resources.hpp"
+#include "fem/system.hpp"
 
 namespace crackle::modal {
 
@@ -83,58 +85,76 @@ std::vector<double> nodal_shape(const mesh::Mesh& mesh, const VariantResult& var
   return values;
 }
 
+namespace {
+
+/// Assembles and solves one variant.
+VariantResult solve_variant(const fem::System& system, const ModalOptions& options) {
+  const mesh::Mesh& mesh = system.mesh();
+  const mesh::Variant variant = system.variant();
+  VariantResult solved;
+  solved.variant = variant;
+  Stopwatch watch;
+  solved.dofs = system.dofs();
+  solved.constraints = system.constraints();
+  const SparseMatrix stiffness = fem::restrict_to_free(system.assemble_stiffness(), solved.constraints);
+  if (options.lumped_mass) {
+    const VectorX lumped = fem::restrict_to_free(system.lumped_mass(), solved.constraints);
+    solved.mass.resize(lumped.size(), lumped.size());
+    solved.mass.reserve(Eigen::VectorXi::Ones(lumped.size()));
+    for (Index i = 0; i < lumped.size(); ++i) solved.mass.insert(i, i) = lumped[i];
+    solved.mass.makeCompressed();
+  } else {
+    solved.mass = fem::restrict_to_free(system.assemble_consistent_mass(), solved.constraints);
+  }
+  solved.n_pieces = count_pieces(mesh, solved.dofs);
+  const int n_rigid = count_rigid_body_modes(mesh, solved.dofs, solved.constraints);
+  solved.assembly_s = watch.seconds();
+  const bool cached = variant == mesh::Variant::uncracked && !options.cache_directory.empty();
+  const std::uint64_t key = cached ? problem_key(stiffness, solved.mass, options) : 0;
+  std::optional<ModeSet> from_cache;
+  if (cached) from_cache = load_cached_modes(options.cache_directory, key, solved.constraints.n_free());
+  try {
+    if (from_cache) {
+      solved.modes = std::move(*from_cache);
+    } else {
+      solved.modes = solve_modes(stiffness, solved.mass, options, n_rigid);
+      if (cached && is_output_rank()) store_cached_modes(options.cache_directory, key, solved.modes);
+    }
+  } catch (const InputError& error) {
+    throw InputError(std::string("variant ") + mesh::variant_name(variant) + ": " + error.what());
+  } catch (const SolverError& error) {
+    throw SolverError(std::string("variant ") + mesh::variant_name(variant) + ": " + error.what());
+  }
+  return solved;
+}
+
+}  // namespace
+
 ModalResult run_modal(const mesh::Mesh& mesh, const fem::Materials& materials,
-                      const std::vector<fem::DirichletCondition>& conditions,
-                      const ModalOptions& options) {
+                      const std::vector<fem::DirichletCondition>& conditions, const ModalOptions& options) {
+  std::map<mesh::Variant, fem::System> systems;
+  return run_modal(
+      [&](mesh::Variant variant) -> const fem::System& {
+        auto found = systems.find(variant);
+        if (found == systems.end()) found = systems.emplace(variant, fem::System(mesh, materials, conditions, variant)).first;
+        return found->second;
+      },
+      options);
+}
+
+ModalResult run_modal(const std::function<const fem::System&(mesh::Variant)>& system_for, const ModalOptions& options) {
   Stopwatch total;
   ModalResult result;
   result.options = options;
   if (result.options.variants.empty()) {
     result.options.variants = {mesh::Variant::uncracked};
-    if (mesh.has_crack()) result.options.variants.push_back(mesh::Variant::open);
+    if (system_for(mesh::Variant::uncracked).mesh().has_crack()) result.options.variants.push_back(mesh::Variant::open);
   }
   for (const mesh::Variant variant : result.options.variants) {
     if (result.find(variant)) {
       throw InputError(std::string("modal.variants lists '") + mesh::variant_name(variant) + "' twice");
     }
-    VariantResult solved;
-    solved.variant = variant;
-    Stopwatch watch;
-    solved.dofs = mesh::make_dof_map(mesh, variant);
-    solved.constraints = fem::make_constraints(solved.dofs, conditions);
-    const SparseMatrix stiffness =
-        fem::restrict_to_free(fem::assemble_stiffness(mesh, solved.dofs, materials), solved.constraints);
-    if (options.lumped_mass) {
-      const VectorX lumped =
-          fem::restrict_to_free(fem::assemble_lumped_mass(mesh, solved.dofs, materials), solved.constraints);
-      solved.mass.resize(lumped.size(), lumped.size());
-      solved.mass.reserve(Eigen::VectorXi::Ones(lumped.size()));
-      for (Index i = 0; i < lumped.size(); ++i) solved.mass.insert(i, i) = lumped[i];
-      solved.mass.makeCompressed();
-    } else {
-      solved.mass = fem::restrict_to_free(fem::assemble_consistent_mass(mesh, solved.dofs, materials),
-                                          solved.constraints);
-    }
-    solved.n_pieces = count_pieces(mesh, solved.dofs);
-    const int n_rigid = count_rigid_body_modes(mesh, solved.dofs, solved.constraints);
-    solved.assembly_s = watch.seconds();
-    const bool cached = variant == mesh::Variant::uncracked && !options.cache_directory.empty();
-    const std::uint64_t key = cached ? problem_key(stiffness, solved.mass, options) : 0;
-    std::optional<ModeSet> from_cache;
-    if (cached) from_cache = load_cached_modes(options.cache_directory, key, solved.constraints.n_free());
-    try {
-      if (from_cache) {
-        solved.modes = std::move(*from_cache);
-      } else {
-        solved.modes = solve_modes(stiffness, solved.mass, options, n_rigid);
-        if (cached && is_output_rank()) store_cached_modes(options.cache_directory, key, solved.modes);
-      }
-    } catch (const InputError& error) {
-      throw InputError(std::string("variant ") + mesh::variant_name(variant) + ": " + error.what());
-    } catch (const SolverError& error) {
-      throw SolverError(std::string("variant ") + mesh::variant_name(variant) + ": " + error.what());
-    }
-    result.variants.push_back(std::move(solved));
+    result.variants.push_back(solve_variant(system_for(variant), options));
   }
 
   const VariantResult* uncracked = result.find(mesh::Variant::uncracked);

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <functional>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -16,6 +17,7 @@
 #include "core/types.hpp"
 #include "fem/assembly.hpp"
 #include "fem/constraints.hpp"
+#include "fem/system.hpp"
 #include "mesh/mesh.hpp"
 #include "modal/eigensolver.hpp"
 
@@ -150,6 +152,11 @@ struct ModalResult {
 ModalResult run_modal(const mesh::Mesh& mesh, const fem::Materials& materials,
                       const std::vector<fem::DirichletCondition>& conditions,
                       const ModalOptions& options);
+
+/// The same over systems already built (fem::System, shared with the other solvers of a run): one
+/// per variant of options.variants (or uncracked, then open when the mesh has a crack), found by
+/// `system_for`.
+ModalResult run_modal(const std::function<const fem::System&(mesh::Variant)>& system_for, const ModalOptions& options);
 
 /// MAC matrix between the columns of `a` and `b` (same rows); weight nullptr: plain MAC.
 MatrixX mac_matrix(const MatrixX& a, const MatrixX& b, const SparseMatrix* weight);

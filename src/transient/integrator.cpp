@@ -22,8 +22,8 @@ void CentralDifference::step(SecondOrderSystem& system, double time, double dt_p
                      std::to_string(displacement.size()) + " and " + std::to_string(velocity.size()));
   }
   const double h = 0.5 * (dt_previous + dt);
-  system.add_force(ForceInput{time, dt, h, displacement, velocity}, force_);
   const double alpha = system.mass_damping();
+  system.add_force(ForceInput{time, dt, h, displacement, velocity, alpha, system.inverse_mass()}, force_);
   const double damped = 1.0 - 0.5 * alpha * h;
   const double scale = 1.0 / (1.0 + 0.5 * alpha * h);
   const double* inverse_mass = system.inverse_mass().data();

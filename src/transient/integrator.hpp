@@ -3,17 +3,12 @@
 /// SecondOrderODESolver, Akantu solveStep): the integrator knows a diagonal mass, a
 /// mass-proportional damping coefficient and a force callback, nothing else.
 #include "core/types.hpp"
+#include "fem/force_term.hpp"
 
 namespace crackle::transient {
 
-/// What a force evaluation at step i sees.
-struct ForceInput {
-  double time = 0.0;              ///< t_i [s]
-  double dt = 0.0;                ///< Delta t(i+1) [s]
-  double step = 0.0;              ///< h = (Delta t(i) + Delta t(i+1))/2 of the velocity update [s]
-  const VectorX& displacement;    ///< U(i)
-  const VectorX& velocity;        ///< V(i-1/2) (V(0) at the first step)
-};
+/// What a force evaluation at step i sees (the state and the integrator's velocity update).
+using ForceInput = fem::StepInput;
 
 /// The semi-discrete system (26) as the integrator sees it:
 /// \f$M\ddot U + \alpha M \dot U = F(t, U, \dot U)\f$, M diagonal (lumped, eq. 27).
@@ -29,8 +24,8 @@ class SecondOrderSystem {
   /// alpha of the damping alpha M [1/s].
   virtual double mass_damping() const = 0;
   /// Adds F(t_i) at U(i) and the half-step velocity V(i-1/2) to `force`, which is zero on entry.
-  /// A term may also make a local dashpot implicit by adding the force that gives the velocity
-  /// update it wants (knowing h, alpha, M^{-1} and the rest of F), see contact damping.
+  /// A term may also make itself implicit by adding the force that gives the velocity update it
+  /// wants (knowing h, alpha, M^{-1} from the input and the rest of F), as the crack contact does.
   virtual void add_force(const ForceInput& input, VectorX& force) = 0;
 };
 

@@ -1,30 +1,34 @@
 #pragma once
-/// \file A transient run: the semi-discrete system (MODEL.md eq. 26) with the matrix-free elastic
-/// forces, Rayleigh damping, loads and crack-face contact as force terms, integrated by central
-/// differences (eq. 28) with health checks, probes, energy balance and per-step callbacks.
+/// \file A transient run: the semi-discrete system (MODEL.md eq. 26) of one fem::System (lumped
+/// mass, K as an operator) with force terms plugged in (fem::ForceTerm: stiffness-proportional
+/// damping, loads, and from outside the crack contact), integrated by central differences (eq. 28)
+/// with health checks, probes, energy balance and per-step callbacks. The solver computes; it
+/// writes no file (the run pipeline does, once).
 ///
 /// Energy balance. Central differences conserve exactly, for a linear undamped system, the
 /// modified energy \f$E_{i+1/2} = \tfrac12 V_{i+1/2}^T M V_{i+1/2} + \tfrac12 U_i^T K U_{i+1}\f$
 /// (= kinetic + strain + \f$\tfrac{\Delta t}{2} V_{i+1/2}^T K U_i\f$), and its change over a step is
 /// the work \f$F_i \cdot (U_{i+1} - U_{i-1})/2\f$ of the other forces. The run tracks
-/// \f$E_{i+1/2} + \tilde\Phi_c - W_{ext} + D_{damping} + D_{friction}\f$, with \f$\tilde\Phi_c\f$ the
-/// penalty energy (written the same way for explicit contact forces; at U(i+1) for implicit ones):
-/// its drift from the first step is the energy error, caused only by the contact (its
-/// nonlinearity, and the numerical dissipation of the implicit pair springs) and rounding. energy.csv shows the physical energies
-/// (kinetic at t_i from the mean velocity, strain, penalty).
+/// \f$E_{i+1/2} + \tilde\Phi - W_{ext} + D_{damping} + D_{internal}\f$, a loop over the force terms
+/// by their fem::EnergyRole: the stored energy \f$\tilde\Phi\f$ of the potential terms (written the
+/// modified way for forces of U(i), as is for forces of U(i+1)), the work of the external ones, the
+/// work of the dissipative ones and the terms' internal dissipation (friction). Its drift from the
+/// first step is the energy error, caused only by the nonlinear terms and rounding. The elastic
+/// term's dot products come from the integrator's fused sums less those of the other terms (one
+/// pass less over memory). energy.csv shows the physical energies (kinetic at t_i from the mean
+/// velocity, strain, penalty).
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
-#include <optional>
 #include <string>
 #include <vector>
 
-#include "contact/contact.hpp"
-#include "fem/assembly.hpp"
-#include "fem/constraints.hpp"
-#include "mesh/mesh.hpp"
+#include <nlohmann/json.hpp>
+
+#include "fem/force_term.hpp"
+#include "fem/system.hpp"
 #include "transient/damping.hpp"
-#include "transient/elastic_operator.hpp"
 #include "transient/excitation.hpp"
 #include "transient/time_step.hpp"
 
@@ -48,7 +52,8 @@ struct TransientOptions {
   bool force_time_step = false;
   TimeStepOptions time_step_options;
   RayleighDamping damping;
-  /// DOF map of the run: `open` (crack faces split, with contact) or `uncracked` (faces tied).
+  /// DOF map of the run when the solver builds its own system: `open` (crack faces split) or
+  /// `uncracked` (faces tied).
   mesh::Variant variant = mesh::Variant::open;
   int energy_interval = 10;        ///< steps between energy samples (health checks, energy.csv rows)
   double energy_tolerance = 0.05;  ///< relative energy-balance error that stops the run
@@ -58,20 +63,19 @@ struct TransientOptions {
   int probe_interval = 1;          ///< steps between probe rows
   bool progress = true;            ///< progress line with ETA on stderr
   double progress_interval = 1.0;  ///< [s] between progress lines
-  /// If not empty, probes.csv, energy.csv and transient.json are written there when the run ends,
-  /// also when it fails (then with "status": "unstable" and what was computed so far).
-  std::filesystem::path output_directory;
-  ElasticOperatorOptions elastic;
+  fem::ElasticOperatorOptions elastic;
 };
 
-/// The physics of a run (the lead fills it from the scene's model).
+/// The physics of a run besides the linear system.
 struct TransientProblem {
-  fem::Materials materials;                        ///< by region
-  std::vector<fem::DirichletCondition> dirichlet;  ///< held DOFs (constant values)
-  std::optional<contact::ContactOptions> contact;  ///< crack-face contact (open variant with a crack)
+  fem::Materials materials;                        ///< by region (when the solver builds its system)
+  std::vector<fem::DirichletCondition> dirichlet;  ///< held DOFs (when the solver builds its system)
   std::vector<ExternalLoad> loads;
-  InitialConditions initial;                       ///< over the DOFs of make_dof_map(mesh, variant)
+  InitialConditions initial;                       ///< over the DOFs of the system's DOF map
   std::vector<Probe> probes;
+  /// Force terms plugged in from outside (the crack contact), over the system's DOFs; evaluated
+  /// after the damping and the loads, a term that needs the other forces last.
+  std::vector<std::shared_ptr<fem::ForceTerm>> terms;
 };
 
 /// Probe rows: times and, per probe, 9 columns u_x..u_z [m], v_x..v_z [m/s], a_x..a_z [m/s^2] at t_i.
@@ -86,10 +90,10 @@ struct EnergyHistory {
   std::vector<double> time;
   std::vector<double> kinetic;        ///< 1/2 V_i^T M V_i, V_i the mean of the half-step velocities
   std::vector<double> strain;         ///< 1/2 U_i^T K U_i
-  std::vector<double> contact;        ///< penalty springs (normal + tangential)
+  std::vector<double> contact;        ///< stored in the potential terms besides K (penalty springs)
   std::vector<double> external_work;  ///< work of the loads since the first step
   std::vector<double> damping;        ///< dissipated by Rayleigh damping since the first step
-  std::vector<double> friction;       ///< dissipated by friction since the first step
+  std::vector<double> friction;       ///< dissipated inside the terms (friction) since the first step
   std::vector<double> balance;        ///< drift of the modified energy balance
   std::vector<double> relative_error; ///< |balance| / energy scale
 };
@@ -104,14 +108,10 @@ struct TransientSummary {
   double dt_critical = 0.0;
   double omega_max = 0.0;          ///< [rad/s], with the margin
   bool time_step_forced = false;
-  bool has_contact = false;
-  contact::PenaltyChoice penalty;
-  double friction_coefficient = 0.0;
-  bool contact_implicit = true;
   RayleighDamping damping;
   double energy_error = 0.0;       ///< largest relative energy-balance error seen
-  double contact_fraction = 0.0;   ///< time average of the closed fraction of the crack area
-  double contact_time_fraction = 0.0;  ///< share of the step time spent in the contact forces
+  double contact_fraction = 0.0;   ///< time average of the terms' active fraction (closed crack area)
+  std::map<std::string, double> term_seconds;  ///< time spent in each plugged-in force term [s]
   double wall_s = 0.0;             ///< run time [s]
   double setup_s = 0.0;            ///< operator, mass, time-step estimate [s]
   double ns_per_dof_step = 0.0;
@@ -144,21 +144,24 @@ struct TransientCallbacks {
 /// step above dt_critical unless forced); run() integrates.
 class TransientSolver {
  public:
-  /// `mesh` is borrowed and must outlive the solver.
+  /// Over a shared system (its lumped mass and K); problem.materials and dirichlet are unused.
+  TransientSolver(std::shared_ptr<const fem::System> system, TransientProblem problem, TransientOptions options);
+  /// Builds its own system from `mesh` (borrowed, must outlive the solver), problem.materials,
+  /// problem.dirichlet and options.variant.
   TransientSolver(const mesh::Mesh& mesh, TransientProblem problem, TransientOptions options);
   ~TransientSolver();
 
+  const fem::System& system() const;
   const mesh::DofMap& dofs() const;
   const fem::Constraints& constraints() const;
   const TimeStepEstimate& time_step_estimate() const;
   double dt() const;
   Index n_steps() const;
-  const contact::PenaltyContact* contact() const;  ///< null without contact
-  const ElasticOperator& elastic_operator() const;
+  const fem::ElasticOperator& elastic_operator() const;
   const VectorX& lumped_mass() const;              ///< eq. (27), per DOF, all DOFs
 
   /// Integrates to end_time (or until a callback asks to stop). SolverError when the health
-  /// checks fail (NaN/Inf, energy growth, energy balance), after flushing outputs and on_finish.
+  /// checks fail (NaN/Inf, energy growth, energy balance), after on_finish.
   const TransientSummary& run(const TransientCallbacks& callbacks = {});
 
   const TransientSummary& summary() const;
@@ -176,10 +179,12 @@ class TransientSolver {
 void write_probe_csv(const std::filesystem::path& path, const ProbeHistory& probes);
 /// energy.csv: time and the EnergyHistory columns with units.
 void write_energy_csv(const std::filesystem::path& path, const EnergyHistory& energy);
-/// transient.json: the summary (public names: steps, dt, dt_critical, penalty, energy_error,
-/// contact_fraction, wall_s, and more).
-void write_transient_json(const std::filesystem::path& path, const TransientSummary& summary);
-/// The three files above into a directory (created if needed).
-void write_transient_outputs(const std::filesystem::path& directory, const TransientSolver& solver);
+/// The summary as transient.json's fields (public names: steps, dt, dt_critical, energy_error,
+/// contact_fraction, wall_s, and more; the contact's own fields are added by whoever plugged it in).
+nlohmann::json transient_json(const TransientSummary& summary);
+/// probes.csv, energy.csv and transient.json (the summary merged with `extra`) into a directory
+/// (created if needed).
+void write_transient_outputs(const std::filesystem::path& directory, const TransientSolver& solver,
+                             const nlohmann::json& extra = nlohmann::json::object());
 
 }  // namespace crackle::transient

@@ -14,7 +14,7 @@ double critical_time_step(double omega_max, double beta) {
   return (2.0 / omega_max) / (std::sqrt(1.0 + xi * xi) + xi);
 }
 
-TimeStepEstimate estimate_time_step(const StiffnessAction& stiffness, const VectorX& inverse_mass, double beta,
+TimeStepEstimate estimate_time_step(const fem::LinearOperator& stiffness, const VectorX& inverse_mass, double beta,
                                     const TimeStepOptions& options) {
   if (!(options.safety_factor > 0.0 && options.safety_factor <= 1.0) || !(options.margin >= 0.0)) {
     throw InputError("time step: expected 0 < safety_factor <= 1 and margin >= 0, got safety_factor = " +
@@ -38,7 +38,7 @@ TimeStepEstimate estimate_time_step(const StiffnessAction& stiffness, const Vect
   double largest = 0.0, largest_before = 0.0;
   int iteration = 0;
   for (; iteration < options.max_iterations; ++iteration) {
-    stiffness(scaled, product);
+    stiffness.apply(scaled, product);
     const double b_previous = off_diagonal.empty() ? 0.0 : off_diagonal.back();
     double a = 0.0;
 #pragma omp parallel for schedule(static) reduction(+ : a) if (n > 100000)

@@ -2,9 +2,8 @@
 /// \file Stable time step of central differences (MODEL.md sec. 4): \f$\Delta t \le 2/\omega_{max}\f$,
 /// with stiffness-proportional damping \f$(2/\omega_{max})(\sqrt{1+\xi^2} - \xi)\f$,
 /// \f$\xi = \beta\omega_{max}/2\f$ (Akantu getStableTimeStep).
-#include <functional>
-
 #include "core/types.hpp"
+#include "fem/operator.hpp"
 
 namespace crackle::transient {
 
@@ -25,17 +24,14 @@ struct TimeStepEstimate {
   int iterations = 0;
 };
 
-/// y = K x (y overwritten), K symmetric positive semi-definite over all DOFs.
-using StiffnessAction = std::function<void(const VectorX& x, VectorX& y)>;
-
 /// \f$\Delta t_{crit} = (2/\omega_{max})(\sqrt{1+\xi^2} - \xi)\f$, \f$\xi = \beta\omega_{max}/2\f$ (= 2/omega_max for beta = 0).
 double critical_time_step(double omega_max, double beta);
 
 /// omega_max^2 = largest eigenvalue of \f$M^{-1/2} K M^{-1/2}\f$ over the DOFs with inverse_mass > 0,
 /// by the Lanczos iteration (no reorthogonalisation: its largest Ritz value never exceeds the
 /// largest eigenvalue, and converges much faster than the power iteration), from a fixed
-/// pseudo-random start. K should include the contact springs all closed. InputError if no DOF moves.
-TimeStepEstimate estimate_time_step(const StiffnessAction& stiffness, const VectorX& inverse_mass, double beta,
+/// pseudo-random start. K (symmetric positive semi-definite, over all DOFs) should include the contact springs all closed. InputError if no DOF moves.
+TimeStepEstimate estimate_time_step(const fem::LinearOperator& stiffness, const VectorX& inverse_mass, double beta,
                                     const TimeStepOptions& options = {});
 
 }  // namespace crackle::transient

@@ -6,7 +6,7 @@
 
 #include "core/errors.hpp"
 #include "gmsh_testing.hpp"
-#include "model.hpp"
+#include "pipeline/model.hpp"
 #include "scene/scene.hpp"
 
 namespace crackle {
@@ -124,8 +124,8 @@ double plate_frequency(int m, int n) {
 
 TEST(Composite, LayersOfOneIsotropicMaterialGiveTheHomogeneousStiffness) {
   const std::string box = "mesh:\n  box: {size: [0.1, 0.05, 0.004], cells: [4, 2, 4], order: 2}\n";
-  const app::Model homogeneous = app::build_model(scene::parse_scene(box + "material: {E: 70e9, nu: 0.33, rho: 2700}\n", "plate.yaml"));
-  const app::Model layered = app::build_model(scene::parse_scene(
+  const pipeline::Model homogeneous = pipeline::build_model(scene::parse_scene(box + "material: {E: 70e9, nu: 0.33, rho: 2700}\n", "plate.yaml"));
+  const pipeline::Model layered = pipeline::build_model(scene::parse_scene(
       box + "materials:\n"
             "  - {name: bottom, isotropic: {E: 70e9, nu: 0.33}, rho: 2700, region: {z: [0, 0.002]}}\n"
             "  - {name: top, isotropic: {E: 70e9, nu: 0.33}, rho: 2700, angle: 30, region: {z: [0.002, 0.004]}}\n",
@@ -147,14 +147,14 @@ TEST(Composite, LayerEndsBecomeGridLinesAndRegionsMustCoverTheBody) {
   // Plies of 0.3 mm and 0.7 mm in a plate of 2 cells through 1 mm: lines are added at 0.3 mm.
   const std::string box = "mesh:\n  box: {size: [0.1, 0.05, 0.001], cells: [2, 1, 2], order: 1}\n";
   const std::string ply = "isotropic: {E: 70e9, nu: 0.33}, rho: 2700";
-  const app::Model model = app::build_model(scene::parse_scene(
+  const pipeline::Model model = pipeline::build_model(scene::parse_scene(
       box + "materials:\n  - {name: a, " + ply + ", region: {z: [0, 0.0003]}}\n  - {name: b, " + ply +
           ", region: {z: [0.0003, 0.001]}}\n",
       "plate.yaml"));
   EXPECT_EQ(model.mesh.n_elements(), 2 * 1 * 3);
   auto error_of = [&](const std::string& materials) {
     try {
-      app::build_model(scene::parse_scene(box + materials, "plate.yaml"));
+      pipeline::build_model(scene::parse_scene(box + materials, "plate.yaml"));
     } catch (const InputError& error) {
       return std::string(error.what());
     }
@@ -174,7 +174,7 @@ TEST(Composite, LayerEndsBecomeGridLinesAndRegionsMustCoverTheBody) {
 
 TEST(Composite, SimplySupportedCrossPlyPlateMatchesLaminatedPlateTheory) {
   const scene::Scene scene = scene::parse_scene(plate_scene(""), "plate.yaml");
-  const app::Model model = app::build_model(scene);
+  const pipeline::Model model = pipeline::build_model(scene);
   const VectorX f = testing::lowest_frequencies(model.mesh, mesh::Variant::open, model.materials, model.dirichlet, 3);
   // The lowest modes: (1,1), then (2,1) and (1,2) or (3,1) depending on the stiffnesses; match each
   // computed frequency to the nearest theoretical one.
@@ -190,9 +190,9 @@ TEST(Composite, DelaminationLimitsBracketEachOther) {
   // A central delamination on the lower 0/90 interface (z = 0.5 mm), on a coarser plate.
   const std::string crack = "crack:\n  plane: {normal: z, at: 0.0005}\n  region: {x: [0.05, 0.1], y: [0.025, 0.075]}\n";
   const scene::Scene scene = scene::parse_scene(plate_scene(crack, "6, 4"), "plate.yaml");
-  const app::Model model = app::build_model(scene);
+  const pipeline::Model model = pipeline::build_model(scene);
   ASSERT_TRUE(model.mesh.has_crack());
-  const app::Model intact = app::build_model(scene::parse_scene(plate_scene("", "6, 4"), "plate.yaml"));
+  const pipeline::Model intact = pipeline::build_model(scene::parse_scene(plate_scene("", "6, 4"), "plate.yaml"));
   const int count = 4;
   const VectorX uncracked = testing::lowest_frequencies(model.mesh, mesh::Variant::uncracked, model.materials, model.dirichlet, count);
   const VectorX open = testing::lowest_frequencies(model.mesh, mesh::Variant::open, model.materials, model.dirichlet, count);
@@ -206,7 +206,7 @@ TEST(Composite, DelaminationLimitsBracketEachOther) {
 
 TEST(Composite, ExampleSceneBuilds) {
   const scene::Scene scene = scene::load_scene(std::string(CRACKLE_SOURCE_DIR) + "/data/composite-plate.yaml");
-  const app::Model model = app::build_model(scene);
+  const pipeline::Model model = pipeline::build_model(scene);
   EXPECT_EQ(model.materials.size(), 4u);
   EXPECT_TRUE(model.mesh.has_crack());
   for (const mesh::CrackPair& pair : model.mesh.crack_pairs) EXPECT_EQ(pair.normal, Vec3(0, 0, 1));

@@ -7,7 +7,7 @@
 
 #include "core/errors.hpp"
 #include "gmsh_testing.hpp"
-#include "model.hpp"
+#include "pipeline/model.hpp"
 #include "scene/scene.hpp"
 
 namespace crackle {
@@ -38,7 +38,7 @@ std::string write_scene(const std::string& name, const std::string& text) {
 
 std::string build_error(const std::string& path) {
   try {
-    app::build_model(scene::load_scene(path));
+    pipeline::build_model(scene::load_scene(path));
   } catch (const InputError& error) {
     return error.what();
   }
@@ -60,7 +60,7 @@ TEST(GmshScene, MeshFileGroupsAndCrack) {
   EXPECT_TRUE(scene.has_crack());
   EXPECT_FALSE(scene.crack);
   EXPECT_EQ(scene.modal.variants, (std::vector<std::string>{"uncracked", "open"}));
-  const app::Model model = app::build_model(scene);
+  const pipeline::Model model = pipeline::build_model(scene);
   EXPECT_TRUE(model.mesh.has_crack());
   ASSERT_EQ(model.dirichlet.size(), 1u);
   EXPECT_EQ(model.dirichlet[0].nodes, model.mesh.node_sets.at("clamp"));
@@ -74,7 +74,7 @@ TEST(GmshScene, MaterialRegionsFromVolumeGroups) {
       "mesh: {gmsh: box-tet4.msh}\n"
       "materials:\n"
       "  - {name: core, isotropic: {E: 70e9, nu: 0.33}, rho: 2700, region: {group: body}}\n");
-  const app::Model model = app::build_model(scene::load_scene(path));
+  const pipeline::Model model = pipeline::build_model(scene::load_scene(path));
   EXPECT_EQ(model.materials.size(), 1u);
   write_scene("test-scene-regions.yaml",
               "mesh: {gmsh: box-tet4.msh}\n"

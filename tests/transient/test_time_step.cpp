@@ -45,7 +45,7 @@ TEST(TimeStep, EstimateBoundsTheDenseOmegaMaxWithTheContactSprings) {
       contact::ContactOptions contact;
       contact.friction_coefficient = 0.3;
       if (explicit_contact) contact.integration = contact::ContactIntegration::explicit_forces;
-      problem.contact = contact;
+      const auto contact_term = testing::plug_contact(mesh, problem, contact);
       TransientOptions options;
       options.end_time = 1e-6;
       options.progress = false;
@@ -58,7 +58,7 @@ TEST(TimeStep, EstimateBoundsTheDenseOmegaMaxWithTheContactSprings) {
         for (Index j = 0; j < dofs.n_dofs(); ++j) {
           unit[j] = 1.0;
           column.setZero();
-          solver.contact()->add_closed_stiffness(unit, column);
+          contact_term->contact().add_closed_stiffness(unit, column);
           stiffness.col(j) += column;
           unit[j] = 0.0;
         }
@@ -131,11 +131,13 @@ TEST(TimeStep, BelowTheLimitStaysBoundedAboveItIsRefusedOrCaught) {
   const std::filesystem::path directory = std::filesystem::temp_directory_path() / "crackle_test_unstable";
   std::filesystem::remove_all(directory);
   start.options.force_time_step = true;
-  start.options.output_directory = directory;
   TransientSolver forced(start.mesh, start.problem, start.options);
   bool finished = false;
   TransientCallbacks callbacks;
-  callbacks.on_finish = [&](const TransientSummary& summary) { finished = summary.status == "unstable"; };
+  callbacks.on_finish = [&](const TransientSummary& summary) {
+    finished = summary.status == "unstable";
+    write_transient_outputs(directory, forced);  // as the run pipeline does
+  };
   EXPECT_THROW(forced.run(callbacks), SolverError);
   EXPECT_TRUE(finished);
   EXPECT_LT(forced.summary().steps, 1000);

@@ -8,7 +8,7 @@
 #include "fem/material.hpp"
 #include "mesh/box.hpp"
 #include "mesh/gmsh.hpp"
-#include "transient/elastic_operator.hpp"
+#include "fem/elastic_operator.hpp"
 #include "transient/solver.hpp"
 #include "transient_testing.hpp"
 
@@ -94,7 +94,7 @@ TEST(Vibration, TetrahedralCantileverRingsAtItsLumpedMassModalFrequency) {
     const fem::Materials materials = {kSteel};
     const mesh::DofMap dofs = mesh::make_dof_map(mesh, mesh::Variant::open);
     const SparseMatrix stiffness = fem::assemble_stiffness(mesh, dofs, materials);
-    const ElasticOperator elastic(mesh, dofs, materials);
+    const fem::ElasticOperator elastic(mesh, dofs, materials);
     EXPECT_EQ(elastic.info().kernel, "assembled");
     const VectorX x = VectorX::LinSpaced(dofs.n_dofs(), -1.0, 1.0);
     VectorX y;
@@ -143,7 +143,7 @@ TEST(Vibration, CrackHeldClosedByPreloadVibratesAtTheUncrackedFrequency) {
   // Static state under the end pressure P (nu = 0: exactly uniaxial): u_x = -P x / E, and the
   // closed crack adds the penalty compression P / eps_N on the far side.
   contact::ContactOptions contact;  // automatic penalty
-  bar.problem.contact = contact;
+  const auto contact_term = testing::plug_contact(mesh, bar.problem, contact);
   const mesh::DofMap dofs = mesh::make_dof_map(mesh, mesh::Variant::open);
   const double penalty = contact::choose_penalty(mesh, bar.problem.materials, contact).normal_penalty;
   const double p = PreloadedBar::kPressure, E = PreloadedBar::kYoung, L = PreloadedBar::kLength;
@@ -169,7 +169,7 @@ TEST(Vibration, CrackHeldClosedByPreloadVibratesAtTheUncrackedFrequency) {
   const double f_closed = testing::zero_crossing_frequency(solver.probes().values[0], solver.dt());
   std::printf("closed crack: f = %.4f Hz, uncracked %.4f Hz, ratio %.6f, penalty %.3g Pa/m (c = %g), closed fraction %.4f, "
               "%lld steps, dt %.3g s\n",
-              f_closed, f_uncracked, f_closed / f_uncracked, penalty, solver.summary().penalty.factor,
+              f_closed, f_uncracked, f_closed / f_uncracked, penalty, contact_term->contact().penalty().factor,
               solver.summary().contact_fraction, static_cast<long long>(solver.summary().steps), solver.dt());
   EXPECT_EQ(solver.summary().contact_fraction, 1.0);
   EXPECT_GE(f_closed / f_uncracked, 0.999);
@@ -195,7 +195,7 @@ TEST(Vibration, WideOpenCrackVibratesAtTheOpenFrequency) {
   problem.dirichlet.push_back({mesh.node_sets.at("x-"), {0, 1, 2}, {0.0, 0.0, 0.0}, "clamp"});
   contact::ContactOptions contact;
   contact.initial_gap = crack.gap;
-  problem.contact = contact;
+  testing::plug_contact(mesh, problem, contact);
 
   const mesh::DofMap dofs = mesh::make_dof_map(mesh, mesh::Variant::open);
   const VectorX mass = fem::assemble_lumped_mass(mesh, dofs, materials);

@@ -6,11 +6,23 @@
 #include <complex>
 #include <vector>
 
+#include "contact/contact_force.hpp"
 #include "fem/assembly.hpp"
 #include "fem/constraints.hpp"
 #include "mesh/mesh.hpp"
+#include "transient/solver.hpp"
 
 namespace crackle::transient::testing {
+
+/// The crack contact plugged into a problem on the open DOF map, as the run pipeline does; the term
+/// is returned for queries (pairs closed, slipping, forces).
+inline std::shared_ptr<contact::ContactForce> plug_contact(const mesh::Mesh& mesh, TransientProblem& problem,
+                                                           const contact::ContactOptions& options) {
+  auto term = std::make_shared<contact::ContactForce>(mesh, mesh::make_dof_map(mesh, mesh::Variant::open),
+                                                      problem.materials, options);
+  problem.terms.push_back(term);
+  return term;
+}
 
 /// Lowest modes of K phi = omega^2 M phi, M the lumped mass, over the free DOFs (dense solve:
 /// small meshes only). Modes are returned over all DOFs (zero at held ones), M-normalised.

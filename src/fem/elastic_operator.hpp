@@ -30,9 +30,10 @@
 
 #include "core/types.hpp"
 #include "fem/assembly.hpp"
+#include "fem/operator.hpp"
 #include "mesh/mesh.hpp"
 
-namespace crackle::transient {
+namespace crackle::fem {
 
 struct ElasticOperatorOptions {
   /// Use the brick kernel when the mesh allows it (false forces the general kernel, for tests).
@@ -57,25 +58,26 @@ struct ElasticOperatorInfo {
 };
 
 /// y = K x over the DOFs of a DOF map (constraints not applied: every DOF, fixed ones included).
-class ElasticOperator {
+class ElasticOperator final : public LinearOperator {
  public:
-  ElasticOperator(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const fem::Materials& materials,
+  ElasticOperator(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const Materials& materials,
                   const ElasticOperatorOptions& options = {});
   ~ElasticOperator();
   ElasticOperator(ElasticOperator&&) noexcept;
   ElasticOperator& operator=(ElasticOperator&&) noexcept;
 
   Index n_dofs() const;
+  Index n_rows() const override { return n_dofs(); }
   const ElasticOperatorInfo& info() const;
 
   /// y += scale K x (x and y of size n_dofs(); y is not cleared).
-  void apply_add(double scale, const VectorX& x, VectorX& y) const;
+  void apply_add(double scale, const VectorX& x, VectorX& y) const override;
   /// y = K x.
-  void apply(const VectorX& x, VectorX& y) const;
+  void apply(const VectorX& x, VectorX& y) const override;
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace crackle::transient
+}  // namespace crackle::fem

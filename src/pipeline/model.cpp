@@ -1,6 +1,6 @@
-#include "model.hpp"
+#include "pipeline/model.hpp"
 
-#include "commands.hpp"
+#include "pipeline/commands.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +10,7 @@
 #include "mesh/box.hpp"
 #include "mesh/gmsh.hpp"
 
-namespace crackle::app {
+namespace crackle::pipeline {
 namespace {
 
 /// Relative tolerance of region ranges (and of the grid lines they add) against the body size.
@@ -189,4 +189,4 @@ Model build_model(const scene::Scene& scene) {
   return model;
 }
 
-}  // namespace crackle::app
+}  // namespace crackle::pipeline

@@ -1,13 +1,13 @@
 #include <iostream>
 
-#include "commands.hpp"
+#include "pipeline/commands.hpp"
 #include "core/errors.hpp"
 #include "io/files.hpp"
-#include "model.hpp"
+#include "pipeline/model.hpp"
 #include "modal/modal.hpp"
 #include "scene/scene.hpp"
 
-namespace crackle::app {
+namespace crackle::pipeline {
 
 modal::ModalOptions modal_options(const scene::ModalSection& section) {
   modal::ModalOptions options;
@@ -31,11 +31,12 @@ void run_modal_command(const ModalCommandOptions& options, std::ostream& out) {
   if (writer) io::ensure_directory(options.output_directory);
   modal::ModalOptions modal_settings = modal_options(section);
   modal_settings.cache_directory = options.modal_cache;
-  const modal::ModalResult result = modal::run_modal(model.mesh, model.materials, model.dirichlet, modal_settings);
+  const modal::ModalResult result = modal::run_modal(
+      [&model](mesh::Variant variant) -> const fem::System& { return *model.system(variant); }, modal_settings);
   if (!writer) return;
   modal::write_modal_outputs(options.output_directory, model.mesh, result);
   out << modal::modal_table(result);
   out << "wrote " << (options.output_directory / "modal.json").string() << ", modes.csv and the mode shapes (VTU)\n";
 }
 
-}  // namespace crackle::app
+}  // namespace crackle::pipeline

@@ -1,4 +1,4 @@
-#include "transient/elastic_operator.hpp"
+#include "fem/elastic_operator.hpp"
 
 #include <omp.h>
 
@@ -13,7 +13,7 @@
 #include "core/quadrature.hpp"
 #include "fem/element.hpp"
 
-namespace crackle::transient {
+namespace crackle::fem {
 namespace {
 
 /// Elements per SIMD batch of the brick kernel (one AVX-512 register of doubles, two AVX2 ones).
@@ -622,7 +622,7 @@ void ElasticOperator::Impl::general_chunk(Index chunk, const double* x, double* 
 
 // ---------------------------------------------------------------------------------------------
 
-ElasticOperator::ElasticOperator(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const fem::Materials& materials,
+ElasticOperator::ElasticOperator(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const Materials& materials,
                                  const ElasticOperatorOptions& options)
     : impl_(std::make_unique<Impl>()) {
   if (mesh.shape != mesh::ElementShape::hexahedron) {
@@ -911,4 +911,4 @@ void ElasticOperator::apply_add(double scale, const VectorX& x, VectorX& y) cons
   }
 }
 
-}  // namespace crackle::transient
+}  // namespace crackle::fem

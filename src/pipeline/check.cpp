@@ -1,25 +1,26 @@
 #include <iomanip>
 #include <ostream>
 
-#include "commands.hpp"
+#include "pipeline/commands.hpp"
 #include "core/resources.hpp"
 #include "fem/assembly.hpp"
 #include "fem/constraints.hpp"
-#include "model.hpp"
+#include "pipeline/model.hpp"
 #include "scene/scene.hpp"
 
-namespace crackle::app {
+namespace crackle::pipeline {
 
 void run_check(const CheckOptions& options, std::ostream& out) {
   Stopwatch clock;
   const scene::Scene scene = scene::load_scene(options.scene_path, parse_overrides(options.overrides));
-  Model model = build_model(scene);
+  const Model model = build_model(scene);
   const double mesh_seconds = clock.seconds();
   const mesh::Mesh& mesh = model.mesh;
 
-  const mesh::DofMap open = mesh::make_dof_map(mesh, mesh::Variant::open);
+  const fem::System& system = *model.system(mesh::Variant::open);
+  const mesh::DofMap& open = system.dofs();
   const mesh::DofMap tied = mesh::make_dof_map(mesh, mesh::Variant::uncracked);
-  const fem::Constraints constraints = fem::make_constraints(open, model.dirichlet);
+  const fem::Constraints& constraints = system.constraints();
   Index front = 0;
   for (const mesh::CrackPair& pair : mesh.crack_pairs) front += pair.on_front();
 
@@ -51,10 +52,10 @@ void run_check(const CheckOptions& options, std::ostream& out) {
   if (!options.assemble) return;
 
   clock.restart();
-  const SparseMatrix stiffness = fem::assemble_stiffness(mesh, open, model.materials);
+  const SparseMatrix stiffness = system.assemble_stiffness();
   const double stiffness_seconds = clock.seconds();
   clock.restart();
-  const VectorX lumped = fem::assemble_lumped_mass(mesh, open, model.materials);
+  const VectorX& lumped = system.lumped_mass();
   const double mass_seconds = clock.seconds();
   out << "total mass   " << std::setprecision(6) << lumped.sum() / 3.0 << " kg\n";
   out << "K            " << stiffness.nonZeros() << " nonzeros, assembled in " << std::setprecision(3)
@@ -63,4 +64,4 @@ void run_check(const CheckOptions& options, std::ostream& out) {
   out << "peak memory  " << peak_rss_bytes() / (1024 * 1024) << " MiB\n";
 }
 
-}  // namespace crackle::app
+}  // namespace crackle::pipeline

@@ -4,9 +4,9 @@
 #include "fem/assembly.hpp"
 #include "fem/material.hpp"
 #include "mesh/box.hpp"
-#include "transient/elastic_operator.hpp"
+#include "fem/elastic_operator.hpp"
 
-namespace crackle::transient {
+namespace crackle::fem {
 namespace {
 
 mesh::Mesh small_box(int order, bool crack) {
@@ -102,4 +102,4 @@ TEST(ElasticOperator, AnisotropicBricksUseDenseMatrices) {
 }
 
 }  // namespace
-}  // namespace crackle::transient
+}  // namespace crackle::fem

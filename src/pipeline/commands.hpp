@@ -8,7 +8,7 @@
 #include "modal/modal.hpp"
 #include "scene/scene.hpp"
 
-namespace crackle::app {
+namespace crackle::pipeline {
 
 /// `--set key.path=value` arguments: scene overrides (validated like the file's own values).
 std::vector<scene::Override> parse_overrides(const std::vector<std::string>& assignments);
@@ -52,4 +52,4 @@ modal::ModalOptions modal_options(const scene::ModalSection& section);
 /// Needs SLEPc initialised (modal::SlepcSession). Under MPI only rank 0 writes and prints.
 void run_modal_command(const ModalCommandOptions& options, std::ostream& out);
 
-}  // namespace crackle::app
+}  // namespace crackle::pipeline

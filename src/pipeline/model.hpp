@@ -1,0 +1,47 @@
+#pragma once
+/// \file The wiring from a validated scene to the objects the solvers take: the mesh, its
+/// materials, the Dirichlet conditions and the linear system of each variant (fem::System),
+/// shared by every stage of a run.
+#include <map>
+#include <memory>
+#include <vector>
+
+#include "fem/assembly.hpp"
+#include "fem/constraints.hpp"
+#include "fem/system.hpp"
+#include "mesh/mesh.hpp"
+#include "scene/scene.hpp"
+
+namespace crackle::pipeline {
+
+/// Everything a scene describes about the body, built once and shared by every stage of a run.
+struct Model {
+  mesh::Mesh mesh;
+  fem::Materials materials;
+  std::vector<fem::DirichletCondition> dirichlet;
+
+  Model() = default;
+  /// A moved model starts without systems (they borrow the mesh and materials of their model).
+  Model(Model&& other) noexcept
+      : mesh(std::move(other.mesh)), materials(std::move(other.materials)), dirichlet(std::move(other.dirichlet)) {}
+  Model(const Model&) = delete;
+  Model& operator=(const Model&) = delete;
+  Model& operator=(Model&&) = delete;
+
+  /// The linear system of a variant (DOF map, constraints, lumped mass, K), made on first use and
+  /// shared by the modal and transient stages. Valid while this model lives.
+  std::shared_ptr<const fem::System> system(mesh::Variant variant) const {
+    std::shared_ptr<const fem::System>& entry = systems_[variant];
+    if (!entry) entry = std::make_shared<const fem::System>(mesh, materials, dirichlet, variant);
+    return entry;
+  }
+
+ private:
+  mutable std::map<mesh::Variant, std::shared_ptr<const fem::System>> systems_;
+};
+
+/// Meshes the body, makes its materials and turns `boundary:` into Dirichlet conditions.
+/// Throws InputError (naming the scene file) for problems only visible once meshed.
+Model build_model(const scene::Scene& scene);
+
+}  // namespace crackle::pipeline

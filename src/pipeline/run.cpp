@@ -1,0 +1,452 @@
+/// \file `crackle run`: the whole pipeline of a scene, each stage only if the scene needs it:
+/// modal (only when something refers to a mode or the scene asks for modal output) -> transient
+/// (with contact only when there is a crack) -> spectrum (harmonics, damage indices, plots).
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <set>
+
+#include "pipeline/commands.hpp"
+#include "core/errors.hpp"
+#include "core/resources.hpp"
+#include "io/csv.hpp"
+#include "io/files.hpp"
+#include "io/vtu.hpp"
+#include "pipeline/model.hpp"
+#include "modal/modal.hpp"
+#include "spectral/harmonics.hpp"
+#include "spectral/plot.hpp"
+#include "spectral/signature.hpp"
+#include "spectral/spectrum.hpp"
+#include "transient/damping.hpp"
+#include "transient/excitation.hpp"
+#include "transient/solver.hpp"
+#include "contact/contact_force.hpp"
+
+namespace crackle::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// One line of run.json: a stage, whether it ran, why, and its time.
+struct Stage {
+  std::string name;
+  bool ran = false;
+  std::string reason;
+  double seconds = 0.0;
+};
+
+/// The modal variants the scene needs (empty: no modal stage).
+std::vector<mesh::Variant> needed_variants(const scene::Scene& scene, std::string& reason) {
+  std::set<mesh::Variant> variants;
+  const scene::TransientSection& transient = *scene.transient;
+  if (transient.excitation && transient.excitation->mode > 0) {
+    const std::string& of = transient.excitation->of;
+    if (of != "open") variants.insert(mesh::Variant::uncracked);
+    if (of != "uncracked") variants.insert(mesh::Variant::open);
+    reason = "transient.excitation.frequency refers to mode " + std::to_string(transient.excitation->mode);
+  }
+  if (transient.damping.at_mode > 0) {
+    variants.insert(mesh::Variant::uncracked);
+    if (reason.empty()) reason = "transient.damping.at refers to mode " + std::to_string(transient.damping.at_mode);
+  }
+  if (scene.has_modal_section) {
+    for (const std::string& name : scene.modal.variants) {
+      variants.insert(name == "open" ? mesh::Variant::open : mesh::Variant::uncracked);
+    }
+    if (reason.empty()) reason = "the scene has a modal: section";
+  }
+  // Keep the uncracked limit first, as the modal module lists it.
+  std::vector<mesh::Variant> ordered;
+  for (mesh::Variant variant : {mesh::Variant::uncracked, mesh::Variant::open}) {
+    if (variants.count(variant)) ordered.push_back(variant);
+  }
+  return ordered;
+}
+
+/// Frequency [Hz] of elastic mode `mode` (1-based) of the given kind from a modal result.
+double mode_frequency(const modal::ModalResult& result, int mode, const std::string& of, const std::string& key) {
+  const int index = mode - 1;
+  if (of == "bilinear") {
+    if (index >= static_cast<int>(result.pairs.size())) {
+      throw InputError(key + ": mode " + std::to_string(mode) + " asked, but only " +
+                       std::to_string(result.pairs.size()) + " modes were paired (raise modal.modes)");
+    }
+    const modal::ModePair& pair = result.pairs[index];
+    if (!pair.paired) {
+      throw InputError(key + ": mode " + std::to_string(mode) + " has no open partner among the " +
+                       std::to_string(result.mac.cols()) + " open modes computed (best MAC " +
+                       format_number(pair.mac) + " < " + format_number(modal::kPairingMac) +
+                       "), so its bilinear frequency is undefined (raise modal.modes)");
+    }
+    return pair.f_bilinear_hz;
+  }
+  const modal::VariantResult* variant =
+      result.find(of == "open" ? mesh::Variant::open : mesh::Variant::uncracked);
+  if (!variant || index >= variant->modes.n_modes()) {
+    throw InputError(key + ": mode " + std::to_string(mode) + " of the " + of + " body asked, but only " +
+                     std::to_string(variant ? variant->modes.n_modes() : 0) + " modes were computed");
+  }
+  return variant->modes.frequencies_hz[index];
+}
+
+std::vector<Index> nodes_in_range(const mesh::Mesh& mesh, const scene::InitialSection& initial) {
+  std::vector<Index> nodes;
+  for (Index node = 0; node < mesh.n_nodes(); ++node) {
+    bool inside = true;
+    for (int axis = 0; axis < 3; ++axis) {
+      if (!initial.range[axis]) continue;
+      const double x = mesh.nodes[node][axis];
+      inside = inside && x >= (*initial.range[axis])[0] && x <= (*initial.range[axis])[1];
+    }
+    if (inside) nodes.push_back(node);
+  }
+  return nodes;
+}
+
+/// Per probe: the analysed component's accumulator.
+struct ProbeSpectrum {
+  std::string name;
+  int component = 2;
+  std::unique_ptr<spectral::HarmonicAccumulator> accumulator;
+};
+
+
+/// Stage 1: the modes, only if something needs them (or the scene asks for them).
+std::optional<modal::ModalResult> run_modal_stage(const scene::Scene& scene, const Model& model,
+                                                  const RunCommandOptions& options, Stage& stage, std::ostream& out) {
+  const std::vector<mesh::Variant> variants = needed_variants(scene, stage.reason);
+  if (variants.empty()) {
+    stage.reason = "nothing refers to a mode";
+    return std::nullopt;
+  }
+  const scene::TransientSection& section = *scene.transient;
+  Stopwatch clock;
+  modal::ModalOptions modal_settings = modal_options(scene.modal);
+  modal_settings.variants = variants;
+  int highest = scene.has_modal_section ? scene.modal.modes : 1;
+  if (section.excitation) highest = std::max(highest, section.excitation->mode);
+  modal_settings.modes = std::max(highest, section.damping.at_mode);
+  modal_settings.cache_directory = options.modal_cache;
+  modal::ModalResult modes = modal::run_modal(
+      [&model](mesh::Variant variant) -> const fem::System& { return *model.system(variant); }, modal_settings);
+  modal::write_modal_outputs(options.output_directory, model.mesh, modes);
+  stage.ran = true;
+  stage.seconds = clock.seconds();
+  out << modal::modal_table(modes);
+  return modes;
+}
+
+/// The transient stage's inputs, from the scene and the modes.
+struct TransientSetup {
+  transient::TransientProblem problem;
+  transient::TransientOptions settings;
+  mesh::Variant variant = mesh::Variant::open;
+  double frequency = 0.0;  ///< excitation frequency [Hz], 0 without a harmonic excitation
+  std::shared_ptr<contact::ContactForce> contact;  ///< null without contact
+};
+
+/// The excitation as a load, and its frequency (0 for a pulse).
+transient::ExternalLoad excitation_load(const scene::Scene& scene, const Model& model,
+                                        const std::optional<modal::ModalResult>& modes, double& frequency) {
+  const scene::ExcitationSection& excitation = *scene.transient->excitation;
+  transient::ExternalLoad load;
+  load.name = "transient.excitation";
+  if (!excitation.face.empty()) load.faces = model.mesh.face_sets.at(excitation.face);
+  if (!excitation.group.empty()) load.nodes = model.mesh.node_sets.at(excitation.group);  // checked by build_model
+  if (excitation.point) load.nodes = {transient::nearest_node(model.mesh, *excitation.point)};
+  load.direction = Vec3::Unit(excitation.direction);
+  load.amplitude = excitation.amplitude;
+  if (excitation.kind == "harmonic") {
+    frequency = excitation.frequency_hz ? *excitation.frequency_hz
+                                        : excitation.ratio * mode_frequency(*modes, excitation.mode, excitation.of,
+                                                                            scene.file + ": transient.excitation.frequency.mode");
+    load.signal.kind = transient::SignalKind::harmonic;
+    load.signal.frequency = frequency;
+    load.signal.ramp_periods = excitation.ramp_periods;
+  } else {
+    load.signal.kind = transient::SignalKind::pulse;
+    load.signal.duration = excitation.duration;
+  }
+  return load;
+}
+
+/// Rayleigh damping from a ratio at a frequency (or a mode), or from alpha and beta.
+transient::RayleighDamping scene_damping(const scene::Scene& scene, const std::optional<modal::ModalResult>& modes) {
+  const scene::DampingSection& damping = scene.transient->damping;
+  if (!damping.ratio) return {damping.alpha, damping.beta};
+  const double at_hz = damping.at_hz ? *damping.at_hz
+                                     : mode_frequency(*modes, damping.at_mode, "uncracked",
+                                                      scene.file + ": transient.damping.at.mode");
+  const double omega = 2.0 * M_PI * at_hz;
+  return damping.type == "stiffness" ? transient::stiffness_proportional_damping(*damping.ratio, omega)
+                                     : transient::mass_proportional_damping(*damping.ratio, omega);
+}
+
+/// The crack contact of the scene's `crack.contact`.
+contact::ContactOptions scene_contact(const scene::Scene& scene) {
+  contact::ContactOptions contact;
+  contact.initial_gap = scene.crack ? scene.crack->gap : (scene.crack_group ? scene.crack_group->gap : 0.0);
+  contact.normal_penalty = scene.contact.penalty.value_or(0.0);
+  contact.friction_coefficient = scene.contact.friction;
+  contact.integration = scene.contact.integration == "explicit" ? contact::ContactIntegration::explicit_forces
+                                                                : contact::ContactIntegration::implicit;
+  return contact;
+}
+
+/// Initial fields (uniform per coordinate box) over the run's DOFs.
+void add_initial_fields(const scene::TransientSection& section, const Model& model, const mesh::DofMap& dofs,
+                        transient::InitialConditions& initial) {
+  for (const scene::InitialSection& box : section.initial) {
+    const std::vector<Index> nodes = nodes_in_range(model.mesh, box);
+    if (initial.velocity.size() == 0) initial.velocity = VectorX::Zero(dofs.n_dofs());
+    if (initial.displacement.size() == 0) initial.displacement = VectorX::Zero(dofs.n_dofs());
+    initial.velocity += transient::uniform_on_nodes(dofs, nodes, box.velocity);
+    initial.displacement += transient::uniform_on_nodes(dofs, nodes, box.displacement);
+  }
+}
+
+TransientSetup transient_setup(const scene::Scene& scene, const Model& model,
+                               const std::optional<modal::ModalResult>& modes, const RunCommandOptions& options) {
+  const scene::TransientSection& section = *scene.transient;
+  TransientSetup setup;
+  if (section.excitation) setup.problem.loads.push_back(excitation_load(scene, model, modes, setup.frequency));
+  transient::TransientOptions& settings = setup.settings;
+  settings.damping = scene_damping(scene, modes);
+  setup.variant = section.variant == "open" ? mesh::Variant::open : mesh::Variant::uncracked;
+  settings.variant = setup.variant;
+  const fem::System& system = *model.system(setup.variant);
+  if (setup.variant == mesh::Variant::open && model.mesh.has_crack()) {
+    setup.contact = std::make_shared<contact::ContactForce>(model.mesh, system.dofs(), model.materials, scene_contact(scene));
+    setup.problem.terms.push_back(setup.contact);
+  }
+  add_initial_fields(section, model, system.dofs(), setup.problem.initial);
+  for (const scene::ProbeSection& probe : section.probes) {
+    setup.problem.probes.push_back({probe.name, transient::nearest_node(model.mesh, probe.point)});
+  }
+  // A hair beyond the last period, so that rounding in n dt cannot leave it one step short.
+  settings.end_time = section.periods ? *section.periods / setup.frequency * (1.0 + 1e-9) : *section.duration;
+  settings.time_step = section.time_step.value_or(0.0);
+  settings.time_step_options.safety_factor = section.safety_factor;
+  settings.force_time_step = section.force_time_step;
+  if (setup.frequency > 0.0) settings.whole_steps_per_period = 1.0 / setup.frequency;
+  settings.progress = section.progress && options.progress;
+  return setup;
+}
+
+/// Per probe, a harmonic accumulator fed every step, and the steady-state verdict over all probes.
+class SpectrumMonitor {
+ public:
+  SpectrumMonitor(const scene::Scene& scene, double frequency, double dt) : spectrum_(*scene.spectrum) {
+    const scene::TransientSection& section = *scene.transient;
+    options_.excitation_frequency_hz = frequency;
+    options_.max_order = spectrum_.harmonics;
+    options_.subharmonics = spectrum_.subharmonics;
+    window_periods_ = spectrum_.window_periods + (spectrum_.subharmonics && spectrum_.window_periods % 2);
+    criterion_.window_periods = window_periods_;
+    criterion_.tolerance = spectrum_.tolerance > 0.0 ? spectrum_.tolerance : 1e-300;
+    for (const scene::ProbeSection& probe : section.probes) {
+      ProbeSpectrum entry;
+      entry.name = probe.name;
+      entry.component = probe.component >= 0 ? probe.component : section.excitation->direction;
+      entry.accumulator = std::make_unique<spectral::HarmonicAccumulator>(options_, dt, 0.0);
+      probes_.push_back(std::move(entry));
+    }
+  }
+
+  /// Feeds one step; true when every probe's table has settled (the run may stop).
+  bool add(const transient::StepView& view) {
+    int completed = 0;
+    for (std::size_t p = 0; p < probes_.size(); ++p) {
+      completed = probes_[p].accumulator->add(view.time, view.probe_sample[9 * p + probes_[p].component]);
+    }
+    if (completed == 0 || spectrum_.tolerance <= 0.0) return false;
+    const int periods = probes_.front().accumulator->n_periods();
+    if (periods < std::max(spectrum_.min_periods, 2 * window_periods_)) return false;
+    spectral::SteadyState verdict;
+    verdict.settled = true;
+    verdict.periods_used = periods;
+    verdict.change = 0.0;
+    for (const ProbeSpectrum& probe : probes_) {
+      const spectral::SteadyState state = probe.accumulator->steady_state(criterion_);
+      verdict.settled = verdict.settled && state.settled;
+      verdict.change = std::max(verdict.change, state.change);
+    }
+    steady_ = verdict;
+    return verdict.settled;
+  }
+
+  /// Stage 3: closes the records, writes spectrum.json, the spectra and the plots.
+  void write(const scene::Scene& scene, const std::filesystem::path& directory, const transient::ProbeHistory& history,
+             double dt, std::ostream& out);
+
+ private:
+  const scene::SpectrumSection& spectrum_;
+  spectral::HarmonicOptions options_;
+  spectral::SteadyStateCriterion criterion_;
+  std::optional<spectral::SteadyState> steady_;
+  int window_periods_ = 0;
+  std::vector<ProbeSpectrum> probes_;
+};
+
+void SpectrumMonitor::write(const scene::Scene& scene, const std::filesystem::path& directory,
+                            const transient::ProbeHistory& history, double dt, std::ostream& out) {
+  const double frequency = options_.excitation_frequency_hz;
+  nlohmann::json spectrum_json = {{"excitation_hz", frequency}, {"amplitude_convention",
+                                  "peak amplitude A_k of x(t) = A_0 + sum A_k cos(2 pi k f t + phi_k), t from the start of the run"}};
+  // Close the record: grid points of the last period still waiting for stencil samples.
+  for (ProbeSpectrum& probe : probes_) probe.accumulator->finish();
+  const int periods = probes_.front().accumulator->n_periods();
+  const int used = std::min(window_periods_, periods - (options_.subharmonics ? periods % 2 : 0));
+  if (used < 1) {
+    throw SolverError(scene.file + ": spectrum: the run completed " + std::to_string(periods) +
+                      " excitation periods, too few for a harmonic table (raise transient.periods)");
+  }
+  spectral::SteadyState state = steady_.value_or(spectral::SteadyState{});
+  state.periods_used = periods;
+  state.limit_reached = !state.settled;
+  nlohmann::json probes_json = nlohmann::json::object();
+  const double sample_step = history.time.size() > 1 ? history.time[1] - history.time[0] : dt;
+  const spectral::Sampling sampling{sample_step, history.time.empty() ? 0.0 : history.time.front()};
+  spectral::SpectrumAnalyzer analyzer;
+  spectral::PlotOptions plot;
+  for (std::size_t p = 0; p < probes_.size(); ++p) {
+    const ProbeSpectrum& probe = probes_[p];
+    const spectral::HarmonicTable table = probe.accumulator->last_table(used);
+    const std::string component = axis_name(probe.component);
+    probes_json[probe.name] = spectral::probe_json(component, table);
+    const std::vector<double>& values = history.values[9 * p + probe.component];
+    spectral::SpectrumOptions spectrum_options;
+    spectrum_options.excitation_frequency_hz = frequency;
+    spectrum_options.periods = used;
+    spectrum_options.subharmonics = options_.subharmonics;
+    const spectral::AmplitudeSpectrum amplitude = analyzer.amplitude_spectrum(values, sampling, spectrum_options);
+    io::write_file_atomic(directory / ("spectrum_" + probe.name + ".csv"), spectral::spectrum_csv(amplitude, "m"));
+    if (spectrum_.plots) {
+      plot.title = probe.name + " u_" + component;
+      const auto history_plot = spectral::plot_time_history(directory / ("history_" + probe.name + ".png"), values, sampling, plot);
+      spectral::plot_spectrum(directory / ("spectrum_" + probe.name + ".png"), amplitude, frequency,
+                              spectral::harmonic_orders(options_), plot);
+      if (!history_plot.written) out << "note: no plots (" << history_plot.note << ")\n";
+    }
+    const spectral::DamageIndices indices = spectral::damage_indices(table);
+    out << "spectrum " << probe.name << " (u_" << component << "): A1 = " << table.amplitude(1) << " m, A2/A1 = "
+        << indices.a2_over_a1 << ", A3/A1 = " << indices.a3_over_a1;
+    if (options_.subharmonics) out << ", A1/2/A1 = " << indices.a_half_over_a1;
+    out << "\n";
+  }
+  spectrum_json["probes"] = probes_json;
+  spectrum_json["steady_state"] = spectral::steady_state_json(state);
+  spectrum_json["steady_state"]["window_periods"] = used;
+  io::write_json(directory / "spectrum.json", spectrum_json);
+}
+
+/// Displacement snapshots (VTU) at evenly spaced steps of a run, only when asked.
+class SnapshotWriter {
+ public:
+  SnapshotWriter(const std::filesystem::path& directory, const Model& model, const mesh::DofMap& dofs, int count,
+                 Index n_steps)
+      : directory_(directory), model_(model), dofs_(dofs) {
+    for (int k = 1; k <= count; ++k) steps_.push_back(std::max<Index>(1, n_steps * k / count) - 1);
+  }
+  void on_step(const transient::StepView& view) {
+    if (next_ >= steps_.size() || view.step < steps_[next_]) return;
+    const mesh::Mesh& mesh = model_.mesh;
+    io::PointField field{"displacement", 3, std::vector<double>(3 * static_cast<std::size_t>(mesh.n_nodes()))};
+    for (Index node = 0; node < mesh.n_nodes(); ++node) {
+      for (int c = 0; c < 3; ++c) field.values[3 * node + c] = view.displacement[dofs_.dof(node, c)];
+    }
+    char name[32];
+    std::snprintf(name, sizeof name, "snapshot_%04zu.vtu", next_);
+    io::write_vtu(directory_ / name, mesh, {field});
+    ++next_;
+  }
+
+ private:
+  std::filesystem::path directory_;
+  const Model& model_;
+  const mesh::DofMap& dofs_;
+  std::vector<Index> steps_;
+  std::size_t next_ = 0;
+};
+
+/// Stage 2: the transient, with the harmonic accumulators fed every step when a spectrum is asked;
+/// probes.csv, energy.csv and transient.json written once, when it ends (also when it fails).
+std::unique_ptr<transient::TransientSolver> run_transient_stage(const scene::Scene& scene, const Model& model,
+                                                                TransientSetup& setup, const fs::path& directory,
+                                                                std::optional<SpectrumMonitor>& spectrum) {
+  const scene::TransientSection& section = *scene.transient;
+  auto solver = std::make_unique<transient::TransientSolver>(model.system(setup.variant), setup.problem, setup.settings);
+  if (scene.spectrum) spectrum.emplace(scene, setup.frequency, solver->dt());
+  SnapshotWriter snapshots(directory, model, solver->dofs(), section.snapshots, solver->n_steps());
+  transient::TransientCallbacks callbacks;
+  callbacks.on_step = [&](const transient::StepView& view) {
+    snapshots.on_step(view);
+    return spectrum ? spectrum->add(view) : false;
+  };
+  const transient::TransientSolver& finished = *solver;
+  callbacks.on_finish = [&](const transient::TransientSummary&) {
+    const nlohmann::json extra = setup.contact ? contact::contact_json(setup.contact->contact()) : nlohmann::json::object();
+    transient::write_transient_outputs(directory, finished, extra);
+  };
+  solver->run(callbacks);
+  return solver;
+}
+
+void write_run_json(const scene::Scene& scene, const fs::path& directory, const std::vector<Stage>& stages,
+                    double frequency, double wall_s) {
+  nlohmann::json run_json = {{"scene", scene.file}, {"output", directory.string()}};
+  nlohmann::json stage_list = nlohmann::json::array();
+  for (const Stage& stage : stages) {
+    stage_list.push_back({{"name", stage.name}, {"ran", stage.ran}, {"reason", stage.reason}, {"seconds", stage.seconds}});
+  }
+  run_json["stages"] = stage_list;
+  run_json["excitation_hz"] = frequency;
+  run_json["wall_s"] = wall_s;
+  io::write_json(directory / "run.json", run_json);
+}
+
+}  // namespace
+
+void run_run_command(const RunCommandOptions& options, std::ostream& out) {
+  Stopwatch total;
+  const scene::Scene scene = scene::load_scene(options.scene_path, parse_overrides(options.overrides));
+  if (!scene.transient) {
+    throw InputError(scene.file + ": transient: expected a transient section for crackle run (crackle modal "
+                     "computes modes alone), got none");
+  }
+  const fs::path& directory = options.output_directory;
+  io::ensure_directory(directory);
+  const Model model = build_model(scene);
+  std::vector<Stage> stages;
+
+  Stage modal_stage{"modal", false, "", 0.0};
+  const std::optional<modal::ModalResult> modes = run_modal_stage(scene, model, options, modal_stage, out);
+  stages.push_back(modal_stage);
+
+  Stage transient_stage{"transient", true, "the scene has a transient: section"};
+  Stopwatch transient_clock;
+  TransientSetup setup = transient_setup(scene, model, modes, options);
+  std::optional<SpectrumMonitor> spectrum;
+  const auto solver = run_transient_stage(scene, model, setup, directory, spectrum);
+  const transient::TransientSummary& summary = solver->summary();
+  transient_stage.seconds = transient_clock.seconds();
+  stages.push_back(transient_stage);
+  out << "transient: " << summary.steps << " steps of " << summary.dt << " s (dt_critical " << summary.dt_critical
+      << " s), " << summary.status << ", energy error " << summary.energy_error << ", " << std::setprecision(3)
+      << summary.wall_s << " s\n";
+
+  Stage spectrum_stage{"spectrum", false, "the scene has no spectrum: section", 0.0};
+  if (spectrum) {
+    Stopwatch clock;
+    spectrum_stage.ran = true;
+    spectrum_stage.reason = "the scene has a spectrum: section";
+    spectrum->write(scene, directory, solver->probes(), solver->dt(), out);
+    spectrum_stage.seconds = clock.seconds();
+  }
+  stages.push_back(spectrum_stage);
+  write_run_json(scene, directory, stages, setup.frequency, total.seconds());
+  out << "wrote " << (directory / "run.json").string() << "\n";
+}
+
+}  // namespace crackle::pipeline
