@@ -62,6 +62,14 @@ struct ReducedIntegratorOptions {
 /// again) or the slip rows \f$p_T = \mu p_N e\f$ with the slip direction e frozen (LU), iterated with
 /// the return mapping until the stick/slip states and directions are unchanged (a fixed point;
 /// exact in one pass for straight slip).
+///
+/// **Cost.** Setup: W in O(c^2 m). Per step: O(c m) for the free gaps, O(c |A|) for the gaps of the
+/// solution, O(|A|^2) per Cholesky solve, plus O(|A|^3/3) whenever the active set differs from the
+/// cached one (frictionless), or an O(|A|^3) LU per iteration while any pair slips (friction).
+/// Measured (m = 40, one core, breathing half the crack): c = 100 rows 44 us/step (1.14 iterations,
+/// 0.14 factorisations per step); c = 1000 rows 11.9 ms/step, dominated by 0.75 refactorisations per
+/// step of the ~530-row active block (a low-rank update of the cached factor is the next step);
+/// friction c = 99 rows 166 us/step, c = 300 rows 6.3 ms/step (3.2-3.6 iterations, all LU).
 class ReducedIntegrator {
  public:
   using LoadFunction = std::function<double(double)>;
