@@ -1,18 +1,181 @@
 /// \file The `crackle` executable: `crackle check|modal|... scene.yaml`.
+///
+/// The command line is strict: an unknown option or argument is an error (with a "did you mean"
+/// suggestion), out-of-range values are errors naming the option, and every bad command line
+/// exits 2 like any other bad input. PETSc/SLEPc options reach PETSc only through an explicit
+/// channel: after `--`, as `--petsc "-opt value"`, or in the PETSC_OPTIONS environment variable.
 #include <CLI/CLI.hpp>
+#include <cstdlib>
 #include <iostream>
+#include <sstream>
 
 #include "pipeline/commands.hpp"
-#include "modal/eigensolver.hpp"
 #include "core/errors.hpp"
+#include "modal/eigensolver.hpp"
 #include "scene/scene.hpp"
+#include "scene/yaml_text.hpp"
+#include "study/plan.hpp"
 #include "study/study.hpp"
+
+namespace {
+
+using namespace crackle;
+
+constexpr int kExitBadInput = 2;
+
+const char* const kExitCodes =
+    "Exit codes: 0 done; 2 bad input (scene file or command line; nothing is written); 3 a solver "
+    "failed, or some cases of a study failed; 4 a file could not be read or written; 130 interrupted.";
+
+const char* const kPetscChannel =
+    "PETSc/SLEPc options go after --, e.g. `crackle modal s.yaml -- -eps_view`, or as --petsc \"-eps_view\" "
+    "(repeatable), or in the PETSC_OPTIONS environment variable; any other unknown option is an error.";
+
+/// A validator for an integer or a number above a bound: "expected a positive integer, got -1".
+CLI::Validator above(double bound, bool integer, const std::string& phrase) {
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        const std::string expected = "expected " + phrase + ", got " + (text.empty() ? "nothing" : text);
+        double value = 0;
+        long long whole = 0;
+        if (integer ? !scene::parse_integer(text, whole) : !scene::parse_number(text, value)) return expected;
+        if (integer) {
+          if (whole > 1000000000LL) return expected;
+          value = static_cast<double>(whole);
+        }
+        return value > bound ? "" : expected;
+      },
+      "");
+}
+
+/// The arguments before the first `--` (crackle's) and after it (PETSc's).
+struct SplitArguments {
+  std::vector<std::string> own;    ///< argv[0] and crackle's arguments
+  std::vector<std::string> petsc;  ///< after `--`
+  bool separated = false;          ///< a `--` was given
+};
+
+SplitArguments split_arguments(int argc, char** argv) {
+  SplitArguments split;
+  for (int i = 0; i < argc; ++i) {
+    const std::string argument = argv[i];
+    if (i > 0 && argument == "--" && !split.separated) {
+      split.separated = true;
+      continue;
+    }
+    (split.separated ? split.petsc : split.own).push_back(argument);
+  }
+  return split;
+}
+
+/// Every name of every option of `command`: "--set", "-o", "--output", ...
+std::vector<std::string> option_names(const CLI::App& command) {
+  std::vector<std::string> names;
+  for (const CLI::Option* option : command.get_options()) {
+    for (const std::string& name : option->get_lnames()) names.push_back("--" + name);
+    for (const std::string& name : option->get_snames()) names.push_back("-" + name);
+  }
+  return names;
+}
+
+/// Scene keys whose last name is `word` (`periods` -> transient.periods).
+std::vector<std::string> scene_keys_named(std::string word) {
+  for (char& c : word)
+    if (c == '-') c = '_';
+  std::vector<std::string> keys;
+  for (const std::string& path : study::leaf_key_paths()) {
+    const std::size_t dot = path.find_last_of('.');
+    if (path.substr(dot == std::string::npos ? 0 : dot + 1) == word) keys.push_back(path);
+  }
+  return keys;
+}
+
+/// The message for the first argument of `rest` that `command` does not take, or "".
+std::string unexpected_argument(const CLI::App& command, const std::vector<std::string>& rest,
+                                bool takes_petsc) {
+  if (rest.empty()) return "";
+  const std::string name = "crackle " + command.get_name();
+  for (std::size_t i = 0; i < rest.size(); ++i) {
+    const std::string& argument = rest[i];
+    if (argument.size() < 2 || argument[0] != '-') continue;
+    const std::string option = argument.substr(0, argument.find('='));
+    std::string hint = scene::suggestion(option, option_names(command));
+    if (hint.empty() && option.rfind("--", 0) == 0) {
+      const std::vector<std::string> keys = scene_keys_named(option.substr(2));
+      std::string value = argument.find('=') != std::string::npos ? argument.substr(argument.find('=') + 1)
+                          : i + 1 < rest.size() && rest[i + 1][0] != '-' ? rest[i + 1]
+                                                                            : "VALUE";
+      if (keys.size() == 1 && command.get_option_no_throw("--set"))
+        hint = " (did you mean '--set " + keys[0] + "=" + value + "'?)";
+    }
+    if (hint.empty() && option[1] != '-' && option.find('_') != std::string::npos) {
+      hint = takes_petsc ? " (a PETSc option? give it after --, e.g. `" + name + " scene.yaml -- " + argument +
+                               "`, or as --petsc \"" + argument + "\")"
+                         : " (" + name + " takes no PETSc options)";
+    }
+    return name + ": unknown option '" + option + "'" + hint + "; see " + name + " --help";
+  }
+  return name + ": unexpected argument '" + rest.front() + "' (it takes one scene file); see " + name + " --help";
+}
+
+/// `crackle run` is one process: under an MPI launcher with more than one rank, every rank would
+/// run the whole job into the same folder. The launcher's environment tells before PETSc starts.
+int mpi_world_size() {
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"}) {
+    const char* value = std::getenv(name);
+    if (value && *value) return std::atoi(value);
+  }
+  return 1;
+}
+
+int mpi_world_rank() {
+  for (const char* name : {"OMPI_COMM_WORLD_RANK", "PMI_RANK"}) {
+    const char* value = std::getenv(name);
+    if (value && *value) return std::atoi(value);
+  }
+  return 0;
+}
+
+/// PETSc's argv: the program name, then each `--petsc` value split at spaces, then what follows `--`.
+class PetscArguments {
+ public:
+  PetscArguments(const std::string& program, const std::vector<std::string>& petsc_options,
+                 const std::vector<std::string>& after_separator) {
+    words_.push_back(program);
+    for (const std::string& option : petsc_options) {
+      std::istringstream words(option);
+      for (std::string word; words >> word;) words_.push_back(word);
+    }
+    words_.insert(words_.end(), after_separator.begin(), after_separator.end());
+    for (std::string& word : words_) pointers_.push_back(word.data());
+    argc_ = static_cast<int>(pointers_.size());
+    pointers_.push_back(nullptr);  // MPI expects argv[argc] == NULL
+    argv_ = pointers_.data();
+  }
+  int* argc() { return &argc_; }
+  char*** argv() { return &argv_; }
+
+ private:
+  std::vector<std::string> words_;
+  std::vector<char*> pointers_;
+  int argc_ = 0;
+  char** argv_ = nullptr;
+};
+
+int bad_command_line(const std::string& message) {
+  std::cerr << "crackle: error: " << message << "\n";
+  return kExitBadInput;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace crackle;
   CLI::App cli{"crackle: nonlinear vibration of elastic bodies with a breathing crack"};
   cli.require_subcommand(1);
   cli.set_version_flag("--version", "crackle 0.1.0");
+  cli.footer(kExitCodes);
+  cli.allow_extras();
 
   pipeline::CheckOptions check;
   CLI::App* check_command = cli.add_subcommand(
@@ -22,31 +185,37 @@ int main(int argc, char** argv) {
   check_command->add_flag("!--no-assembly", check.assemble, "Skip assembling K and M");
 
   pipeline::ModalCommandOptions modal;
+  std::vector<std::string> modal_petsc;
   CLI::App* modal_command = cli.add_subcommand(
       "modal", "Eigenmodes of the uncracked (faces tied) and open-crack body, paired by MAC, with the "
-               "bilinear frequency of each pair. PETSc/SLEPc options may follow, e.g. -eps_view");
+               "bilinear frequency of each pair. Runs under mpirun -np N (SLEPc)");
   modal_command->add_option("scene", modal.scene_path, "Scene file (YAML)")->required();
   modal_command->add_option("--set", modal.overrides, "Override a scene value: --set key.path=value (repeatable)");
   modal_command->add_option("-o,--output", modal.output_directory, "Output directory")->capture_default_str();
-  modal_command->add_option("--modes", modal.modes, "Number of modes (overrides modal.modes)");
+  modal_command->add_option("--modes", modal.modes, "Number of modes (overrides modal.modes)")
+      ->check(above(0, true, "a positive integer"));
   modal_command->add_option("--solver", modal.solver, "slepc or arpack (overrides modal.solver)")
       ->check(CLI::IsMember({"slepc", "arpack"}));
   modal_command->add_option("--modal-cache", modal.modal_cache,
                             "Folder where the uncracked solve is looked up and stored (shared by study cases)");
-  modal_command->allow_extras();
+  modal_command->add_option("--petsc", modal_petsc, "PETSc/SLEPc options, e.g. --petsc \"-eps_view\" (repeatable)");
+  modal_command->footer(kPetscChannel);
 
   pipeline::RunCommandOptions run;
+  std::vector<std::string> run_petsc;
   bool quiet = false;
   CLI::App* run_command = cli.add_subcommand(
       "run", "The scene's pipeline: modal (only if a mode is referred to or modal: is given) -> transient "
-             "(explicit dynamics with crack-face contact) -> spectrum (harmonics, damage indices, plots)");
+             "(explicit dynamics with crack-face contact) -> spectrum (harmonics, damage indices, plots). "
+             "One process: not under mpirun -np N with N > 1 (use crackle study for many runs)");
   run_command->add_option("scene", run.scene_path, "Scene file (YAML)")->required();
   run_command->add_option("--set", run.overrides, "Override a scene value: --set key.path=value (repeatable)");
   run_command->add_option("-o,--output", run.output_directory, "Output directory")->capture_default_str();
   run_command->add_option("--modal-cache", run.modal_cache,
                           "Folder where the uncracked solve is looked up and stored (shared by study cases)");
   run_command->add_flag("-q,--quiet", quiet, "No progress line");
-  run_command->allow_extras();
+  run_command->add_option("--petsc", run_petsc, "PETSc/SLEPc options, e.g. --petsc \"-eps_view\" (repeatable)");
+  run_command->footer(kPetscChannel);
 
   study::StudyOptions study_options;
   study_options.executable = "/proc/self/exe";
@@ -54,44 +223,83 @@ int main(int argc, char** argv) {
   CLI::App* study_command = cli.add_subcommand(
       "study", "Parameter study: every case of the scene's study: section as its own run, in parallel and "
                "resumable (rerun the same command to finish an interrupted study); writes study.csv, "
-               "study.json, plots/ and cases/NNNN/. Under mpirun the cases are spread over the ranks");
+               "study.json, plots/ and cases/NNNN/. Under mpirun the cases are spread over the ranks. "
+               "Exits 3 when some cases failed (they are recorded in the tables)");
   study_command->add_option("scene", study_options.scene_path, "Scene file (YAML) with a study: section")->required();
   study_command->add_option("-o,--output", study_options.output_dir, "Output directory")->required();
-  study_command->add_option("-j,--jobs", study_options.jobs, "Cases at a time (default: the cores)");
+  study_command->add_option("-j,--jobs", study_options.jobs, "Cases at a time (default: the cores)")
+      ->check(above(0, true, "a positive integer"));
   study_command->add_flag("--retry-failed", study_options.retry_failed, "Rerun cases recorded as failed");
   study_command->add_flag("--no-modal-cache", no_modal_cache, "Solve the uncracked modes in every case");
-  study_command->add_option("--case-timeout", study_options.case_timeout_s, "Stop a case after this many seconds");
+  study_command->add_option("--case-timeout", study_options.case_timeout_s,
+                            "Stop a case after this many seconds (default: no limit)")
+      ->check(above(0, false, "a positive number of seconds"));
 
   CLI::App* format_command =
       cli.add_subcommand("scene-format", "Print the reference of every scene key (Markdown)");
+  for (CLI::App* command : {check_command, modal_command, run_command, study_command, format_command})
+    command->allow_extras();
 
-  try {
-    cli.parse(argc, argv);
-  } catch (const CLI::ParseError& error) {
-    return cli.exit(error);
+  // Crackle's own arguments before `--`, PETSc's after it.
+  SplitArguments arguments = split_arguments(argc, argv);
+  std::vector<std::string> commands;
+  for (const CLI::App* command : {check_command, modal_command, run_command, study_command, format_command})
+    commands.push_back(command->get_name());
+  if (arguments.own.size() > 1 && arguments.own[1][0] != '-' &&
+      std::find(commands.begin(), commands.end(), arguments.own[1]) == commands.end()) {
+    std::string list;
+    for (const std::string& name : commands) list += (list.empty() ? "" : ", ") + name;
+    return bad_command_line("unknown command '" + arguments.own[1] + "'" + scene::suggestion(arguments.own[1], commands) +
+                            " (commands: " + list + "); see crackle --help");
   }
+
+  std::vector<std::string> reversed(arguments.own.rbegin(), arguments.own.rend() - 1);  // CLI11 takes them reversed
+  const auto unexpected = [&]() -> std::string {
+    for (CLI::App* command : cli.get_subcommands()) {
+      const bool takes_petsc = command == modal_command || command == run_command;
+      const std::string message = unexpected_argument(*command, command->remaining(), takes_petsc);
+      if (!message.empty()) return message;
+    }
+    const std::vector<std::string> rest = cli.remaining();
+    return rest.empty() ? "" : "unexpected argument '" + rest.front() + "' before the command; see crackle --help";
+  };
+  try {
+    cli.parse(reversed);
+  } catch (const CLI::ParseError& error) {
+    if (error.get_exit_code() == 0) return cli.exit(error);  // --help, --version
+    const std::string message = unexpected();  // an unknown option says more than what it left missing
+    std::string where = "crackle";
+    for (const CLI::App* command : cli.get_subcommands()) where += " " + command->get_name();
+    return bad_command_line(!message.empty() ? message : where + ": " + error.what() + "; see " + where + " --help");
+  }
+  if (const std::string message = unexpected(); !message.empty()) return bad_command_line(message);
+  const bool takes_petsc = *modal_command || *run_command;
+  if (arguments.separated && !takes_petsc && !arguments.petsc.empty()) {
+    return bad_command_line("crackle " + cli.get_subcommands().front()->get_name() +
+                            ": unexpected arguments after -- (only modal and run take PETSc options)");
+  }
+
   try {
     if (*check_command) pipeline::run_check(check, std::cout);
     if (*modal_command) {
-      // PETSc sees only the arguments CLI11 did not take (e.g. -eps_view), and PETSC_OPTIONS.
-      std::vector<std::string> extras = modal_command->remaining();
-      std::vector<char*> petsc_argv{argv[0]};
-      for (std::string& extra : extras) petsc_argv.push_back(extra.data());
-      int petsc_argc = static_cast<int>(petsc_argv.size());
-      petsc_argv.push_back(nullptr);  // MPI expects argv[argc] == NULL
-      char** petsc_args = petsc_argv.data();
-      modal::SlepcSession session(&petsc_argc, &petsc_args);
+      PetscArguments petsc(arguments.own.front(), modal_petsc, arguments.petsc);
+      modal::SlepcSession session(petsc.argc(), petsc.argv());
       pipeline::run_modal_command(modal, std::cout);
     }
     if (*run_command) {
+      if (const int ranks = mpi_world_size(); ranks > 1) {
+        // Every rank exits with the same code; only rank 0 says why.
+        if (mpi_world_rank() == 0) {
+          std::cerr << "crackle: error: crackle run is a single-process job, got " << ranks
+                    << " MPI processes (each would run the whole job into the same folder); run it "
+                       "without mpirun (crackle modal runs under mpirun; crackle study spreads cases over "
+                       "the ranks)\n";
+        }
+        return kExitBadInput;
+      }
       run.progress = !quiet;
-      std::vector<std::string> extras = run_command->remaining();
-      std::vector<char*> petsc_argv{argv[0]};
-      for (std::string& extra : extras) petsc_argv.push_back(extra.data());
-      int petsc_argc = static_cast<int>(petsc_argv.size());
-      petsc_argv.push_back(nullptr);
-      char** petsc_args = petsc_argv.data();
-      modal::SlepcSession session(&petsc_argc, &petsc_args);
+      PetscArguments petsc(arguments.own.front(), run_petsc, arguments.petsc);
+      modal::SlepcSession session(petsc.argc(), petsc.argv());
       pipeline::run_run_command(run, std::cout);
     }
     if (*study_command) {

@@ -7,11 +7,18 @@
 
 namespace crackle::io {
 
+std::string csv_field(const std::string& text) {
+  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (const char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
+
 std::string to_csv(const CsvTable& table) {
   std::string text;
   for (std::size_t c = 0; c < table.headers.size(); ++c) {
     if (c) text += ',';
-    text += table.headers[c];
+    text += csv_field(table.headers[c]);
   }
   text += '\n';
   const std::size_t rows = table.columns.empty() ? 0 : table.columns.front().size();

@@ -17,7 +17,12 @@ struct CsvTable {
   }
 };
 
-/// Text of the table (full double precision, comma-separated, '\n' line ends).
+/// One CSV field per RFC 4180: as it is, or in double quotes (quotes doubled) when it holds a
+/// comma, a double quote or a line break.
+std::string csv_field(const std::string& text);
+
+/// Text of the table (headers quoted per RFC 4180 where needed, numbers in full double precision,
+/// comma-separated, '\n' line ends).
 std::string to_csv(const CsvTable& table);
 
 /// Writes the table atomically; IoError on failure or on columns of unequal length.

@@ -1,6 +1,7 @@
 #include "scene/scene.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -185,9 +186,11 @@ Param build_parameters() {
       choice("variant", "Run the body with its crack (open faces with contact) or with the faces tied.",
              {"open", "uncracked"}).defaults_to("open"),
       list_of("probes", "Points whose displacement, velocity and acceleration are recorded (nearest node).", {
-        text("name", "Name of the probe (column prefix, spectrum.json key).").required(),
+        text("name", "Name of the probe: letters, digits, _ . - (column prefix, file names, spectrum.json key).")
+            .required(),
         number("point", "Position.").with_unit("m").list(3).required(),
-        choice("component", "Component analysed by the spectrum (default: the excitation direction).", kAxes),
+        choice("component", "Component of the displacement analysed by the spectrum (default: the excitation "
+                            "direction); its unit is that of the harmonic amplitudes.", kAxes).with_unit("m"),
       }).defaults_to("[]"),
       list_of("initial", "Initial velocity and displacement (MODEL.md eq. 6), uniform over the nodes in a "
                          "coordinate range (all nodes when no range is given).", {
@@ -358,6 +361,27 @@ std::string and_list(const std::vector<std::string>& words) {
   return text;
 }
 
+/// A name that becomes part of file names and CSV headers (probes): letters, digits, _ . - only.
+void check_file_safe_name(const Values& values, const std::string& path, const std::string& name) {
+  const bool safe = std::all_of(name.begin(), name.end(), [](unsigned char c) {
+    return std::isalnum(c) || c == '_' || c == '.' || c == '-';
+  });
+  if (safe && name != "." && name != "..") return;
+  std::string shown;  // the name as a message can show it on one line
+  for (const char c : name) {
+    if (c == '\n')
+      shown += "\\n";
+    else if (c == '\r')
+      shown += "\\r";
+    else if (c == '\t')
+      shown += "\\t";
+    else
+      shown += c;
+  }
+  values.fail(path, "a name of letters, digits, _ . - (it names output files and CSV columns)",
+              "'" + shown + "'");
+}
+
 /// Exactly one of `keys` must be given below `parent`.
 std::string exactly_one(const Values& values, const std::string& parent, const std::vector<std::string>& keys) {
   const std::vector<std::string> given = given_keys(values, parent, keys);
@@ -438,6 +462,7 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
     const std::string entry = "transient.probes[" + std::to_string(i) + "]";
     ProbeSection probe;
     probe.name = values.word(entry + ".name");
+    check_file_safe_name(values, entry + ".name", probe.name);
     probe.point = vec3(values.numbers(entry + ".point"));
     if (values.has(entry + ".component")) probe.component = axis_index(values.word(entry + ".component"));
     for (const ProbeSection& earlier : transient.probes) {
@@ -488,6 +513,9 @@ Scene scene_from(const Values& values) {
   scene.file = values.file();
   if (values.has("mesh.gmsh")) {
     scene.gmsh_file = mesh_file_path(values.file(), values.word("mesh.gmsh"));
+    std::error_code error;
+    if (std::filesystem::is_directory(scene.gmsh_file, error))
+      values.fail("mesh.gmsh", "a Gmsh mesh file", "a directory, '" + scene.gmsh_file + "'");
   } else {
     scene.box.origin = vec3(values.numbers("mesh.box.origin"));
     scene.box.size = vec3(values.numbers("mesh.box.size"));
@@ -595,12 +623,20 @@ Scene parse_scene(const std::string& text, const std::string& name, const std::v
   return scene_from(validate(scene_parameters(), document, name));
 }
 
-Scene load_scene(const std::string& path, const std::vector<Override>& overrides) {
-  std::ifstream file(path);
+std::string read_scene_file(const std::string& path) {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error))
+    throw InputError(path + ": expected a readable scene file, got a directory");
+  std::ifstream file(path, std::ios::binary);
   if (!file) throw InputError(path + ": expected a readable scene file, got " + std::strerror(errno));
   std::ostringstream text;
   text << file.rdbuf();
-  return parse_scene(text.str(), path, overrides);
+  if (file.bad()) throw InputError(path + ": expected a readable scene file, got a read error");
+  return text.str();
+}
+
+Scene load_scene(const std::string& path, const std::vector<Override>& overrides) {
+  return parse_scene(read_scene_file(path), path, overrides);
 }
 
 const Param& study_parameters() {

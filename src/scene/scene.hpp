@@ -170,6 +170,10 @@ struct Override {
   std::string value;  ///< YAML text: "0.004", "[0.007, 0.01]", "lumped"
 };
 
+/// The text of a scene file. InputError naming the path and the reason (missing, unreadable, a
+/// directory) when it cannot be read.
+std::string read_scene_file(const std::string& path);
+
 /// Loads and validates a scene file. Throws InputError (one line, see above) on any problem.
 Scene load_scene(const std::string& path, const std::vector<Override>& overrides = {});
 

@@ -254,7 +254,8 @@ class Validator {
         if (!param.scalar_child.empty() && node.IsScalar()) {
           YAML::Node expanded(YAML::NodeType::Map);
           expanded[param.scalar_child] = node;
-          visit_map(param, expanded, path, line, defaulted);
+          // The key made up here has no line: messages about it take the value's.
+          visit_map(param, expanded, path, line, defaulted, mark_line(node));
         } else {
           visit_map(param, node, path, line, defaulted);
         }
@@ -287,11 +288,14 @@ class Validator {
     }
   }
 
+  /// `unmarked_key_line`: the line of keys that carry none (a map expanded from a scalar).
   void visit_children(const Param& param, const YAML::Node& node, const std::string& path, int line,
-                      bool defaulted) {
+                      bool defaulted, int unmarked_key_line = -1) {
     std::map<std::string, int> key_lines;
-    for (const auto& entry : node)
-      key_lines[entry.first.Scalar()] = defaulted ? line : mark_line(entry.first);
+    for (const auto& entry : node) {
+      const int key_line = mark_line(entry.first);
+      key_lines[entry.first.Scalar()] = defaulted ? line : key_line > 0 ? key_line : unmarked_key_line;
+    }
     for (const Param& c : param.children) {
       const bool present = node[c.name].IsDefined();
       if (param.is_one_of && !present) continue;
@@ -300,7 +304,7 @@ class Validator {
   }
 
   void visit_map(const Param& param, const YAML::Node& node, const std::string& path, int line,
-                 bool defaulted) {
+                 bool defaulted, int unmarked_key_line = -1) {
     const YAML::Node map = node.IsNull() ? YAML::Node(YAML::NodeType::Map) : node;
     if (!map.IsMap()) fail(path, line, describe(param), describe_node(node));
     Value value;
@@ -325,7 +329,7 @@ class Validator {
     if (param.is_one_of && seen.size() != 1) {
       fail(path, line, describe(param), seen.empty() ? "none" : join({seen.begin(), seen.end()}, " and "));
     }
-    visit_children(param, map, path, line, defaulted);
+    visit_children(param, map, path, line, defaulted, unmarked_key_line);
   }
 
   void visit_list(const Param& param, const YAML::Node& node, const std::string& path, int line,
@@ -508,13 +512,29 @@ void fail(const std::string& file, int line, const std::string& path, const std:
                    (path.empty() ? "" : path + ": ") + "expected " + expected + ", got " + got);
 }
 
+namespace {
+
+/// InputError when `node` (the document, or a value given for `path`) expands to too many nodes.
+void check_node_limit(const YAML::Node& node, const std::string& file, const std::string& path) {
+  int line = -1;
+  std::string where;
+  if (!exceeds_node_limit(node, kMaxDocumentNodes, path, where, line)) return;
+  fail(file, line, where, "at most " + std::to_string(kMaxDocumentNodes) + " YAML nodes with aliases expanded",
+       "more (nested aliases?)");
+}
+
+}  // namespace
+
 YAML::Node parse_yaml(const std::string& text, const std::string& file) {
+  YAML::Node document;
   try {
-    return YAML::Load(text);
+    document = YAML::Load(text);
   } catch (const YAML::ParserException& error) {
     fail(file, error.mark.line >= 0 ? error.mark.line + 1 : -1, "", "valid YAML",
          "a syntax error (" + error.msg + ")");
   }
+  check_node_limit(document, file, "");
+  return document;
 }
 
 Values validate(const Param& root, const YAML::Node& document, const std::string& file) {
@@ -536,6 +556,7 @@ void apply_override(YAML::Node& document, const std::string& path, const std::st
   } catch (const YAML::ParserException& error) {
     fail(file, -1, path, "a YAML value", "'" + value + "' (" + error.msg + ")");
   }
+  check_node_limit(parsed, file, path);
   YAML::Node node = document;  // yaml-cpp nodes are references: `node` walks through `document`
   std::string where;
   for (std::size_t s = 0; s < steps.size(); ++s) {

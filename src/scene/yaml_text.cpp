@@ -51,7 +51,7 @@ std::string describe_node(const YAML::Node& node) {
     if (node.size() == 0) return "an empty list";
     return "a list of " + std::to_string(node.size()) + (node.size() == 1 ? " entry" : " entries");
   }
-  if (node.IsMap()) return "a map";
+  if (node.IsMap()) return node.size() == 0 ? "an empty map" : "a map";
   const std::string& text = node.Scalar();
   double value = 0;
   if (!is_quoted(node) && parse_number(text, value)) return format_number(value);
@@ -100,6 +100,56 @@ std::string suggestion(const std::string& word, const std::vector<std::string>& 
     }
   }
   return best.empty() ? "" : " (did you mean '" + prefix + best + "'?)";
+}
+
+namespace {
+
+/// Counts the nodes below `node` into `count`; true once the count passes `limit`, with
+/// `where`/`line` the key path and line of the entry (at most three keys deep) that crossed it.
+/// `path` and `key_line` are those of `node`'s entry.
+bool count_nodes(const YAML::Node& node, std::size_t limit, std::size_t& count, const std::string& path,
+                 int key_line, int depth, std::string& where, int& line) {
+  if (++count > limit) {
+    where = path;
+    line = key_line;
+    return true;
+  }
+  const bool deeper = depth < 3;
+  if (node.IsMap()) {
+    for (const auto& entry : node) {
+      const std::string key = entry.first.IsScalar() ? entry.first.Scalar() : "?";
+      const std::string child = !deeper ? path : path.empty() ? key : path + "." + key;
+      const int child_line = deeper ? mark_line(entry.first) : key_line;
+      if (count_nodes(entry.first, limit, count, child, child_line, depth + 1, where, line) ||
+          count_nodes(entry.second, limit, count, child, child_line, depth + 1, where, line))
+        return true;
+    }
+  } else if (node.IsSequence()) {
+    std::size_t index = 0;
+    for (const auto& item : node) {
+      const std::string child = deeper ? path + "[" + std::to_string(index) + "]" : path;
+      if (count_nodes(item, limit, count, child, key_line, depth + 1, where, line)) return true;
+      ++index;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+bool exceeds_node_limit(const YAML::Node& node, std::size_t limit, const std::string& path, std::string& where,
+                        int& line) {
+  std::size_t count = 0;
+  line = -1;
+  return count_nodes(node, limit, count, path, mark_line(node), 0, where, line);
+}
+
+std::size_t count_nodes(const YAML::Node& node, std::size_t limit) {
+  std::size_t count = 0;
+  std::string where;
+  int line = -1;
+  count_nodes(node, limit, count, "", -1, 0, where, line);
+  return count;
 }
 
 bool split_path(const std::string& path, std::vector<PathStep>& steps) {

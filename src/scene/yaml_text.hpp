@@ -15,7 +15,7 @@ bool parse_number(const std::string& text, double& value);
 bool parse_integer(const std::string& text, long long& value);
 /// A scalar written in quotes ('1.0' is text, not a number).
 bool is_quoted(const YAML::Node& node);
-/// How a message shows what the document holds: "-2e11", "true", "'abc'", "a map",
+/// How a message shows what the document holds: "-2e11", "true", "'abc'", "a map", "an empty map",
 /// "a list of 2 entries", "nothing".
 std::string describe_node(const YAML::Node& node);
 /// 1-based line of a node in its file, or -1 when unknown.
@@ -24,6 +24,19 @@ int mark_line(const YAML::Node& node);
 /// with transpositions, ignoring case, within a third of the length), or "".
 std::string suggestion(const std::string& word, const std::vector<std::string>& candidates,
                        const std::string& prefix = "");
+
+/// Most nodes a document may hold once its aliases are expanded (nested aliases can make a few
+/// lines stand for billions of nodes). Far above any real scene: three axes of 100000 grid lines.
+constexpr std::size_t kMaxDocumentNodes = 1000000;
+
+/// True when `node`, its aliases expanded, holds more than `limit` nodes; then `where` is the key
+/// path (below `path`, at most three keys deep) of the entry that crosses the limit and `line` its
+/// line (or -1). Stops walking at the limit, so it costs at most `limit` steps.
+bool exceeds_node_limit(const YAML::Node& node, std::size_t limit, const std::string& path, std::string& where,
+                        int& line);
+
+/// Nodes of `node` with its aliases expanded, counted up to `limit` + 1.
+std::size_t count_nodes(const YAML::Node& node, std::size_t limit);
 
 /// One step of a key path: a key, or an index into a list when `key` is empty.
 struct PathStep {

@@ -156,9 +156,9 @@ PlotResult plot_spectrum(const fs::path& png, const AmplitudeSpectrum& spectrum,
   for (std::size_t k = 0; k < spectrum.frequency_hz.size(); ++k) {
     data += number_text(spectrum.frequency_hz[k]);
     data += ' ';
-    data += number_text(spectrum.amplitude[k]);
+    data += number_text(std::abs(spectrum.amplitude[k]));  // a log scale: bin 0 (the signed mean) by size
     data += '\n';
-    if (std::isfinite(spectrum.amplitude[k])) largest = std::max(largest, spectrum.amplitude[k]);
+    if (std::isfinite(spectrum.amplitude[k])) largest = std::max(largest, std::abs(spectrum.amplitude[k]));
   }
   const double floor = largest > 0.0 ? 1e-14 * largest : 1e-300;
   std::string body = "set logscale y\nset xlabel 'frequency [Hz]'\nset ylabel " +

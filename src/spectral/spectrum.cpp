@@ -150,8 +150,9 @@ AmplitudeSpectrum SpectrumAnalyzer::amplitude_spectrum(const std::vector<double>
   for (int k = 0; k < bins; ++k) {
     const bool single = k == 0 || (length % 2 == 0 && k == length / 2);
     spectrum.frequency_hz[k] = k * spectrum.resolution_hz;
-    spectrum.amplitude[k] =
-        (single ? 1.0 : 2.0) * std::hypot(out.data[k][0], out.data[k][1]) / weight_sum;
+    // Bin 0 of a real record is real: the signed mean, as order 0 of a harmonic table.
+    spectrum.amplitude[k] = k == 0 ? out.data[0][0] / weight_sum
+                                   : (single ? 1.0 : 2.0) * std::hypot(out.data[k][0], out.data[k][1]) / weight_sum;
   }
   return spectrum;
 }

@@ -23,8 +23,9 @@ struct SpectrumOptions {
 };
 
 /// One-sided spectrum of peak amplitudes: bin k at frequency k/(N dt), k = 0..N/2, amplitude
-/// 2|X_k|/sum(w) (|X_k|/sum(w) at 0 and at the Nyquist bin), so a sinusoid of peak amplitude
-/// A on an exact bin reads A. Units: frequency [Hz], amplitude [unit of the signal].
+/// 2|X_k|/sum(w) (|X_k|/sum(w) at the Nyquist bin), so a sinusoid of peak amplitude A on an exact
+/// bin reads A. Bin 0 is the signed (window-weighted) mean X_0/sum(w), the convention of order 0
+/// in harmonics.hpp and spectrum.json. Units: frequency [Hz], amplitude [unit of the signal].
 struct AmplitudeSpectrum {
   std::vector<double> frequency_hz;
   std::vector<double> amplitude;

@@ -21,6 +21,8 @@ using scene::Kind;
 using scene::Param;
 
 constexpr std::size_t kMaxCases = 100000;
+/// Most YAML nodes of all case scenes together (cases x nodes of the scene file).
+constexpr std::size_t kMaxPlanNodes = 100000000;
 
 std::string join(const std::vector<std::string>& words, const std::string& separator = ", ") {
   std::string text;
@@ -179,15 +181,22 @@ std::vector<std::string> range_values(const YAML::Node& node, const std::string&
          low_list ? "a list of " + std::to_string(low.size()) + " numbers, like from" : "a number, like from",
          describe_node(to.value));
   }
-  char* end = nullptr;
   const YAML::Node& count_node = steps.value;
-  const long count = count_node.IsScalar() && !is_quoted(count_node)
-                         ? std::strtol(count_node.Scalar().c_str(), &end, 10)
-                         : 0;
-  if (!end || *end != '\0' || count < 2 || count > static_cast<long>(kMaxCases))
-    fail(file, steps_line, path + ".steps", "an integer >= 2", describe_node(count_node));
+  long long count = 0;
+  const bool whole = count_node.IsScalar() && !is_quoted(count_node) &&
+                     scene::parse_integer(count_node.Scalar(), count);
+  if (!whole || count < 2 || count > static_cast<long long>(kMaxCases)) {
+    double number = 0;
+    // An integer or a number is shown as written (10000000, not 1e7).
+    const bool numeric = count_node.IsScalar() && !is_quoted(count_node) &&
+                         (whole || parse_number(count_node.Scalar(), number));
+    fail(file, steps_line, path + ".steps",
+         "an integer in 2.." + std::to_string(kMaxCases) + " (a study has at most " + std::to_string(kMaxCases) +
+             " cases)",
+         numeric ? count_node.Scalar() : describe_node(count_node));
+  }
   std::vector<std::string> values;
-  for (long k = 0; k < count; ++k) {
+  for (long long k = 0; k < count; ++k) {
     std::vector<std::string> parts;
     for (std::size_t i = 0; i < low.size(); ++i) {
       const double t = static_cast<double>(k) / static_cast<double>(count - 1);
@@ -278,6 +287,24 @@ std::string check_key_path(const std::string& path) {
     param = child;
   }
   return "";
+}
+
+std::string key_unit(const std::string& path) {
+  std::vector<PathStep> steps;
+  if (!split_path(path, steps)) return "";
+  const Param* param = &scene::scene_parameters();
+  for (const PathStep& step : steps) {
+    if (step.key.empty()) continue;  // an index: the entry of a list has the list's keys
+    param = param->child(step.key);
+    if (!param) return "";
+  }
+  if (!param->unit.empty()) return param->unit;
+  return param->kind == Kind::number || param->kind == Kind::integer ? "-" : "";
+}
+
+std::string key_header(const std::string& path) {
+  const std::string unit = key_unit(path);
+  return unit.empty() ? path : path + " [" + unit + "]";
 }
 
 std::vector<std::string> leaf_key_paths() {
@@ -462,6 +489,15 @@ StudyPlan plan_study(const std::string& text, const std::string& file) {
         fail(file, spec.line, "study.vary", "at most " + std::to_string(kMaxCases) + " cases", "more");
     }
   }
+  if (n_cases > kMaxCases)
+    fail(file, spec.line, "study.vary", "at most " + std::to_string(kMaxCases) + " cases",
+         std::to_string(n_cases));
+  // Every case is validated and written as a whole scene: bound the work (aliases expanded).
+  const std::size_t document_nodes = scene::count_nodes(scene::parse_yaml(text, file), kMaxPlanNodes);
+  if (n_cases * document_nodes > kMaxPlanNodes)
+    fail(file, spec.line, "study.vary",
+         "at most " + std::to_string(kMaxPlanNodes) + " YAML nodes over all cases (cases x nodes of the scene)",
+         std::to_string(n_cases) + " cases of " + std::to_string(document_nodes) + " nodes");
   plan.cases.resize(n_cases);
   for (std::size_t c = 0; c < n_cases; ++c) {
     StudyCase& study_case = plan.cases[c];

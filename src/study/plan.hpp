@@ -71,6 +71,14 @@ std::string strip_study_section(const std::string& text, const std::string& file
 /// as "expected ..., got ..." text.
 std::string check_key_path(const std::string& path);
 
+/// The unit of a scene key as the parameter table declares it ("m" for crack.region.z), "-" for a
+/// number or integer declared without one (dimensionless), "" for other keys (choices, texts,
+/// maps) and for paths the table does not declare.
+std::string key_unit(const std::string& path);
+
+/// `path [unit]` as study.csv heads a column of that key (no brackets when the unit is "").
+std::string key_header(const std::string& path);
+
 /// Every scalar key path of the scene format, list entries as `[0]`: mesh.box.size, boundary[0].face.
 std::vector<std::string> leaf_key_paths();
 

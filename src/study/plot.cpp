@@ -157,7 +157,9 @@ PlotReport plot_study(const StudyPlan& plan, const StudyTable& table, const fs::
       report.notes.push_back(vary[k].path + ": not plotted (a single value)");
       continue;
     }
-    const std::string x_label = width == 1 ? vary[k].path : vary[k].path + "[" + std::to_string(entry) + "]";
+    const std::string unit = key_unit(vary[k].path);
+    const std::string x_label = (width == 1 ? vary[k].path : vary[k].path + "[" + std::to_string(entry) + "]") +
+                                (unit.empty() ? "" : " [" + unit + "]");
 
     for (int column : columns) {
       LinePlot plot;

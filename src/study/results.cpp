@@ -10,6 +10,7 @@
 #include <map>
 #include <set>
 
+#include "io/csv.hpp"
 #include "io/files.hpp"
 
 namespace crackle::study {
@@ -76,13 +77,6 @@ Cell text_cell(const std::string& text) {
   const double value = std::strtod(text.c_str(), &end);
   if (!text.empty() && end == text.c_str() + text.size() && std::isfinite(value)) cell.number = value;
   return cell;
-}
-
-std::string csv_field(const std::string& text) {
-  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return quoted + "\"";
 }
 
 json node_to_json(const YAML::Node& node) {
@@ -273,7 +267,7 @@ StudyTable build_table(const StudyPlan& plan, const std::vector<json>& cases) {
     table.kinds.push_back(kind);
   };
   add_fixed("case", "case");
-  for (const VariedKey& key : plan.spec.vary) add_fixed(key.path, "parameter");
+  for (const VariedKey& key : plan.spec.vary) add_fixed(key_header(key.path), "parameter");
   add_fixed("status", "status");
   add_fixed("error", "error");
   using Extract = std::function<Cell(const json&)>;
@@ -318,7 +312,11 @@ StudyTable build_table(const StudyPlan& plan, const std::vector<json>& cases) {
       const json all = c["spectrum"].value("probes", json::object());
       return all.contains(name) ? all[name] : json();
     };
-    const std::string unit = columns.unit.empty() ? "" : " [" + columns.unit + "]";
+    // The probe's own unit when spectrum.json gives one, else that of what a probe's spectrum
+    // analyses, as the scene table declares it (transient.probes[].component: a displacement).
+    const std::string amplitude_unit =
+        columns.unit.empty() ? key_unit("transient.probes[0].component") : columns.unit;
+    const std::string unit = amplitude_unit.empty() ? "" : " [" + amplitude_unit + "]";
     kind = "amplitude";
     for (double order : columns.orders) {
       add(name + ".A" + order_label(order) + unit, [=](const json& c) {
@@ -338,7 +336,7 @@ StudyTable build_table(const StudyPlan& plan, const std::vector<json>& cases) {
     kind = "index";
     for (const std::string& index : indices) {
       const std::string index_unit = index == "beta"
-                                         ? (columns.unit.empty() ? "" : " [1/" + columns.unit + "]")
+                                         ? (amplitude_unit.empty() ? "" : " [1/" + amplitude_unit + "]")
                                      : index.find('/') != std::string::npos ? " [-]"
                                                                             : "";
       add(name + "." + index + index_unit, [=](const json& c) {
@@ -369,10 +367,10 @@ StudyTable build_table(const StudyPlan& plan, const std::vector<json>& cases) {
 
 std::string table_csv(const StudyTable& table) {
   std::string text;
-  for (std::size_t c = 0; c < table.headers.size(); ++c) text += (c ? "," : "") + csv_field(table.headers[c]);
+  for (std::size_t c = 0; c < table.headers.size(); ++c) text += (c ? "," : "") + io::csv_field(table.headers[c]);
   text += '\n';
   for (const auto& row : table.rows) {
-    for (std::size_t c = 0; c < row.size(); ++c) text += (c ? "," : "") + csv_field(row[c].text);
+    for (std::size_t c = 0; c < row.size(); ++c) text += (c ? "," : "") + io::csv_field(row[c].text);
     text += '\n';
   }
   return text;

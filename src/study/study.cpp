@@ -108,17 +108,27 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-/// The last non-empty line of a file from byte `offset` on, or "".
-std::string last_line(const fs::path& path, std::uintmax_t offset) {
+/// What a failed command said, from its stderr (a file, from byte `offset` on): the last
+/// `crackle: error: ...` line, else the last non-empty line, else "". Lines end at '\n' or '\r'
+/// (a progress line is rewritten in place with '\r').
+std::string error_line(const fs::path& path, std::uintmax_t offset) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return "";
   in.seekg(static_cast<std::streamoff>(offset));
-  std::string line, last;
-  while (std::getline(in, line)) {
-    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  std::string last, error;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    std::size_t end = text.find_first_of("\r\n", start);
+    if (end == std::string::npos) end = text.size();
+    std::string line = text.substr(start, end - start);
+    while (!line.empty() && line.back() == ' ') line.pop_back();
     if (!line.empty()) last = line;
+    const std::size_t found = line.find("crackle: error: ");
+    if (found != std::string::npos) error = line.substr(found);
+    start = end + 1;
   }
-  return last;
+  return error.empty() ? last : error;
 }
 
 std::string command_line(const std::vector<std::string>& argv) {
@@ -391,7 +401,7 @@ bool StudyRun::poll_jobs() {
       finish_case(job, "", "", "");
     } else {
       std::string error = timed_out ? "timed out after " + duration_text(options_.case_timeout_s)
-                                    : last_line(job.folder / "log.txt", job.log_offset);
+                                    : error_line(job.folder / "log.txt", job.log_offset);
       if (error.empty()) error = "crackle " + name + ": " + status->describe() + " without a message";
       finish_case(job, name, error, timed_out ? "timed out" : status->describe());
     }
@@ -546,18 +556,13 @@ int StudyRun::run() {
   }
   if (last_reported_ != n_done_) progress(true);
   write_tables();
-  return 0;
+  return n_failed_ > 0 ? kExitFailedCases : 0;
 }
 
 }  // namespace
 
 int run_study(const StudyOptions& options, std::ostream& log) {
-  const std::string text = [&] {
-    std::ifstream file(options.scene_path, std::ios::binary);
-    if (!file)
-      throw InputError(options.scene_path + ": expected a readable scene file, got " + std::strerror(errno));
-    return std::string(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
-  }();
+  const std::string text = scene::read_scene_file(options.scene_path);
   const StudyPlan plan = plan_study(text, options.scene_path);  // every case validated before anything runs
   const InterruptGuard guard;
   StudyRun study(options, plan, log);

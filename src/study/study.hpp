@@ -40,8 +40,14 @@ struct StudyOptions {
   double poll_interval_s = 0.05;    ///< how often running cases are checked
 };
 
-/// Runs the study; progress (cases done/total, failures, ETA) and notes go to `log`. Returns 0
-/// when every case is done (failed cases included: they are recorded, the study goes on), 130
+/// Exit code of a study whose cases are all done but some failed (`crackle study` exits with it).
+constexpr int kExitFailedCases = 3;
+
+/// Runs the study; progress (cases done/total, failures, ETA) and notes go to `log`. A failed case
+/// does not stop the others: it is recorded (case.json `error`: the `crackle: error: ...` line of
+/// its stderr) and tabulated. Returns 0 when every case is done and ok, kExitFailedCases (3) when
+/// every case is done and at least one failed (this run or an earlier one; on rank 0, which
+/// writes the tables; other ranks return 0 so that the MPI launcher lets rank 0 finish), 130
 /// when interrupted by SIGINT/SIGTERM/SIGHUP (the cases in flight are stopped and not recorded).
 /// Throws InputError (exit code 2), before any case runs, for a bad scene or study section or a
 /// case the scene loader rejects; IoError when DIR cannot be written or is in use by another study.

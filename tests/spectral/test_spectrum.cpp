@@ -26,7 +26,7 @@ std::vector<double> direct_spectrum(const std::vector<double>& x) {
     std::complex<double> sum = 0.0;
     for (int i = 0; i < n; ++i) sum += x[i] * std::polar(1.0, -2 * M_PI * double(k) * i / n);
     const bool single = k == 0 || (n % 2 == 0 && k == n / 2);
-    amplitude[k] = (single ? 1.0 : 2.0) * std::abs(sum) / n;
+    amplitude[k] = k == 0 ? sum.real() / n : (single ? 1.0 : 2.0) * std::abs(sum) / n;  // bin 0: signed mean
   }
   return amplitude;
 }
@@ -86,7 +86,9 @@ TEST(Spectrum, HarmonicsFallOnExactBinsOfWholePeriods) {
   EXPECT_NEAR(spectrum.start_time, sampling.start_time + 32 * sampling.time_step, 1e-15);
   for (std::size_t k = 0; k < spectrum.amplitude.size(); ++k) {
     const double order = spectrum.frequency_hz[k] / kF;
-    const double expected_amplitude = std::abs(expected(truth, std::round(2 * order) / 2));
+    const std::complex<double> complex_amplitude = expected(truth, std::round(2 * order) / 2);
+    // Bin 0 is the signed mean (real), the others peak amplitudes.
+    const double expected_amplitude = k == 0 ? complex_amplitude.real() : std::abs(complex_amplitude);
     const bool on_order = std::abs(order * 2 - std::round(order * 2)) < 1e-9;
     EXPECT_NEAR(spectrum.amplitude[k], on_order ? expected_amplitude : 0.0, 1e-12) << "bin " << k;
   }

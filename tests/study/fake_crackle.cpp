@@ -6,6 +6,9 @@
 //   CRACKLE_FAKE_MARKER    file to which each run appends "<command> <case folder> <parent pid>",
 //                          and each modal cache access "cache-solve|cache-hit <cache folder>"
 //   CRACKLE_FAKE_SLEEP_MS  time each run takes
+//   CRACKLE_FAKE_TRAILER   a line written to stderr after the error line of a failing command
+// `run` writes progress lines to stderr the way crackle does ('\r', no line end), so a failure's
+// `crackle: error: ...` line follows a progress line.
 // A scene with material.nu = 0.333 fails like a solver failure (exit 3, one line on stderr); a
 // leaked MPI launcher variable (OMPI_COMM_WORLD_SIZE) fails too.
 #include <fcntl.h>
@@ -77,6 +80,7 @@ int main(int argc, char** argv) {
       std::this_thread::sleep_for(std::chrono::milliseconds(std::atoi(sleep)));
     const crackle::scene::Scene scene = crackle::scene::load_scene(scene_path);
     std::cerr << "fake_crackle " << command << ": " << scene_path << "\n";
+    if (command == "run") std::cerr << "\rtransient  50% step 1/2 ETA 1s\rtransient 100% step 2/2 ETA 0s" << std::flush;
     if (scene.material.poisson == 0.333) throw crackle::SolverError("fake solver failure: nu = 0.333");
 
     json uncracked;
@@ -139,6 +143,7 @@ int main(int argc, char** argv) {
     return 0;
   } catch (const std::exception& error) {
     std::cerr << "crackle: error: " << error.what() << "\n";
+    if (const char* trailer = std::getenv("CRACKLE_FAKE_TRAILER")) std::cerr << trailer << "\n";
     return crackle::exit_code_for(error);
   }
 }

@@ -143,7 +143,8 @@ TEST(StudyPlan, MessagesNameFileLineAndPath) {
   EXPECT_EQ(study("  vary:\n    crack.region.z: {from: [0.009, 0.01], to: 0.005, steps: 3}\n"),
             "beam.yaml:17: study.vary.crack.region.z.to: expected a list of 2 numbers, like from, got 0.005");
   EXPECT_EQ(study("  vary:\n    material.E: {from: 1e9, to: 2e9, steps: 1}\n"),
-            "beam.yaml:17: study.vary.material.E.steps: expected an integer >= 2, got 1");
+            "beam.yaml:17: study.vary.material.E.steps: expected an integer in 2..100000 (a study has at most "
+            "100000 cases), got 1");
   EXPECT_EQ(study("  vary:\n    material.E: {from: 1e9, to: 2e9, step: 3}\n"),
             "beam.yaml:17: study.vary.material.E.step: expected one of from, to, steps, got unknown key "
             "'step' (did you "

@@ -165,7 +165,7 @@ TEST(StudyRun, SixCasesOneFailingAreAllTabulated) {
                       "  outputs: [modal, spectrum]\n");
   const ScopedEnvironment environment({{"CRACKLE_FAKE_MARKER", workspace.marker.string()}});
   std::string log;
-  ASSERT_EQ(run_quietly(options_for(workspace, "out", 2), &log), 0);
+  ASSERT_EQ(run_quietly(options_for(workspace, "out", 2), &log), kExitFailedCases);  // a case failed
   EXPECT_NE(log.find("study: 6/6 cases done, 1 failed, 0 running"), std::string::npos) << log;
   EXPECT_NE(log.find("ETA"), std::string::npos);
 
@@ -179,9 +179,9 @@ TEST(StudyRun, SixCasesOneFailingAreAllTabulated) {
     return static_cast<std::size_t>(found - header.begin());
   };
   for (const char* name :
-       {"case", "crack.region.z", "material.nu", "status", "error", "f_uncracked_1 [Hz]", "f_open_1 [Hz]",
-        "f_bilinear_1 [Hz]", "mac_1 [-]", "f_uncracked_3 [Hz]", "excitation [Hz]", "tip.A1/2", "tip.A1",
-        "tip.A2", "tip.A3", "tip.A2/A1 [-]", "tip.A3/A1 [-]", "tip.A1/2/A1 [-]", "tip.beta"})
+       {"case", "crack.region.z [m]", "material.nu [-]", "status", "error", "f_uncracked_1 [Hz]", "f_open_1 [Hz]",
+        "f_bilinear_1 [Hz]", "mac_1 [-]", "f_uncracked_3 [Hz]", "excitation [Hz]", "tip.A1/2 [m]", "tip.A1 [m]",
+        "tip.A2 [m]", "tip.A3 [m]", "tip.A2/A1 [-]", "tip.A3/A1 [-]", "tip.A1/2/A1 [-]", "tip.beta [1/m]"})
     column(name);
   for (std::size_t i = 1; i < rows.size(); ++i) {
     const auto row = csv_fields(rows[i]);
@@ -198,7 +198,7 @@ TEST(StudyRun, SixCasesOneFailingAreAllTabulated) {
       EXPECT_GT(std::stod(row[column("tip.A2/A1 [-]")]), 0.0);
     }
   }
-  EXPECT_EQ(csv_fields(rows[6])[column("crack.region.z")], "[0.004, 0.01]");
+  EXPECT_EQ(csv_fields(rows[6])[column("crack.region.z [m]")], "[0.004, 0.01]");
 
   const json study = json::parse(read(out / "study.json"));
   EXPECT_EQ(study["n_cases"], 6);
@@ -231,11 +231,11 @@ TEST(StudyRun, JobsOneAndTwoGiveIdenticalTables) {
                       "    crack.region.z: [[0.008, 0.01], [0.007, 0.01], [0.006, 0.01]]\n"
                       "    material.nu: [0.3, 0.333]\n"
                       "  outputs: [modal, spectrum]\n");
-  ASSERT_EQ(run_quietly(options_for(workspace, "one", 1)), 0);
+  ASSERT_EQ(run_quietly(options_for(workspace, "one", 1)), kExitFailedCases);  // the nu = 0.333 cases
   StudyOptions two = options_for(workspace, "two", 2);
   two.gnuplot = "/nonexistent/gnuplot";  // plots are skipped with a note, the tables stay the same
   std::string log;
-  ASSERT_EQ(run_quietly(two, &log), 0);
+  ASSERT_EQ(run_quietly(two, &log), kExitFailedCases);
   EXPECT_NE(
       log.find("study: note: gnuplot ('/nonexistent/gnuplot') not found: plots not drawn; data and scripts "
                "written"),
@@ -401,6 +401,27 @@ TEST(StudyResults, UnpairedModesLeaveRatioAndBilinearFrequencyEmpty) {
   EXPECT_TRUE(summary["pairs"][1]["ratio"].is_null());
   EXPECT_EQ(summary["pairs"][1]["mac"], 0.08);  // the MAC says why
   EXPECT_FALSE(summary["pairs"][1]["paired"].get<bool>());
+}
+
+TEST(StudyRun, FailedCaseRecordsItsErrorLineAndTheStudyExitsThree) {
+  // The failing case writes progress lines ('\r'), then its error line, then one more line.
+  Workspace workspace("failing",
+                      "study:\n"
+                      "  vary:\n"
+                      "    material.nu: [0.3, 0.333]\n"
+                      "  outputs: [spectrum]\n");
+  const ScopedEnvironment environment({{"CRACKLE_FAKE_TRAILER", "WARNING! There are options you set that were not used!"}});
+  std::string log;
+  ASSERT_EQ(run_quietly(options_for(workspace, "out", 2), &log), kExitFailedCases) << log;
+  const json failed = json::parse(read(workspace.root / "out/cases/0001/case.json"));
+  EXPECT_EQ(failed["status"], "failed");
+  EXPECT_EQ(failed["error"], "crackle: error: fake solver failure: nu = 0.333");
+  EXPECT_EQ(failed["exit"], "exit status 3");
+  EXPECT_NE(log.find("study: cases/0001 failed: crackle: error: fake solver failure: nu = 0.333\n"), std::string::npos)
+      << log;
+  // A rerun finds every case done, one of them failed: the study still says so.
+  ASSERT_EQ(run_quietly(options_for(workspace, "out", 2), &log), kExitFailedCases) << log;
+  EXPECT_NE(log.find("2 cases, 1 ok, 1 failed"), std::string::npos) << log;
 }
 
 TEST(StudyRun, RealCrackleWhenItHasTheModalCommand) {

@@ -1,0 +1,159 @@
+// The command line at the edges, on the built executable: unknown and mistyped options, values
+// out of range and stray arguments are errors naming the option (with a suggestion) and exit 2;
+// --help and --version exit 0; PETSc options pass only after -- or with --petsc; `crackle run`
+// refuses to run as several MPI ranks.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int exit_code = -1;
+  std::string output;  ///< stdout and stderr together
+};
+
+Result crackle(const std::string& arguments, const std::string& environment = "") {
+  const std::string command =
+      environment + " " + std::string(CRACKLE_BINARY_DIR) + "/apps/crackle " + arguments + " 2>&1";
+  Result result;
+  FILE* pipe = popen(command.c_str(), "r");
+  std::array<char, 4096> buffer;
+  while (std::fgets(buffer.data(), buffer.size(), pipe)) result.output += buffer.data();
+  const int status = pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+std::string data(const std::string& name) { return std::string(CRACKLE_SOURCE_DIR) + "/data/" + name; }
+
+/// A two-mode cantilever that solves in a blink.
+fs::path small_scene() {
+  const fs::path path = fs::temp_directory_path() / ("crackle-cli-edges-" + std::to_string(::getpid()) + ".yaml");
+  std::ofstream(path) << "mesh:\n  box: {size: [0.2, 0.02, 0.01], cells: [8, 1, 1], order: 1}\n"
+                         "material: {E: 210.0e9, nu: 0.3, rho: 7850.0}\n"
+                         "boundary:\n  - {face: x-, fix: [x, y, z]}\n"
+                         "modal: {modes: 2, variants: [uncracked]}\n";
+  return path;
+}
+
+struct BadCommandLine {
+  std::string arguments;
+  std::string message;  ///< the whole output: one line
+};
+
+TEST(CliEdges, BadCommandLinesGiveOneLineAndExitCode2) {
+  const std::string beam = data("beam.yaml"), study = data("depth-study.yaml");
+  const std::vector<BadCommandLine> cases = {
+      // unknown and mistyped options
+      {"run " + beam + " --sett transient.periods=2",
+       "crackle run: unknown option '--sett' (did you mean '--set'?); see crackle run --help"},
+      {"run " + beam + " --periods 4",
+       "crackle run: unknown option '--periods' (did you mean '--set transient.periods=4'?); see crackle run --help"},
+      {"run " + beam + " --modes=4",
+       "crackle run: unknown option '--modes' (did you mean '--set modal.modes=4'?); see crackle run --help"},
+      {"modal " + beam + " --mdoes 4", "crackle modal: unknown option '--mdoes' (did you mean '--modes'?); see crackle "
+                                       "modal --help"},
+      {"study " + study + " -o out --jbos 2",
+       "crackle study: unknown option '--jbos' (did you mean '--jobs'?); see crackle study --help"},
+      {"check " + beam + " --no-assembley",
+       "crackle check: unknown option '--no-assembley' (did you mean '--no-assembly'?); see crackle check --help"},
+      {"modal " + beam + " -eps_view",
+       "crackle modal: unknown option '-eps_view' (a PETSc option? give it after --, e.g. `crackle modal scene.yaml "
+       "-- -eps_view`, or as --petsc \"-eps_view\"); see crackle modal --help"},
+      {"check " + beam + " -- -eps_view",
+       "crackle check: unexpected arguments after -- (only modal and run take PETSc options)"},
+      {"check " + beam + " other.yaml",
+       "crackle check: unexpected argument 'other.yaml' (it takes one scene file); see crackle check --help"},
+      {"chekc " + beam,
+       "unknown command 'chekc' (did you mean 'check'?) (commands: check, modal, run, study, scene-format); see "
+       "crackle --help"},
+      // values out of range
+      {"modal " + beam + " --modes -1",
+       "crackle modal: --modes: expected a positive integer, got -1; see crackle modal --help"},
+      {"modal " + beam + " --modes 0",
+       "crackle modal: --modes: expected a positive integer, got 0; see crackle modal --help"},
+      {"modal " + beam + " --modes many",
+       "crackle modal: --modes: expected a positive integer, got many; see crackle modal --help"},
+      {"study " + study + " -o out --jobs 0",
+       "crackle study: --jobs: expected a positive integer, got 0; see crackle study --help"},
+      {"study " + study + " -o out -j -1",
+       "crackle study: --jobs: expected a positive integer, got -1; see crackle study --help"},
+      {"study " + study + " -o out --case-timeout -5",
+       "crackle study: --case-timeout: expected a positive number of seconds, got -5; see crackle study --help"},
+      // what CLI11 itself rejects exits 2 as well
+      {"run", "crackle run: scene is required; see crackle run --help"},
+      {"study " + study, "crackle study: --output is required; see crackle study --help"},
+      {"modal " + beam + " --modes", "crackle modal: --modes: 1 required INT missing; see crackle modal --help"},
+  };
+  for (const BadCommandLine& bad : cases) {
+    SCOPED_TRACE(bad.arguments);
+    const Result result = crackle(bad.arguments);
+    EXPECT_EQ(result.exit_code, 2);
+    EXPECT_EQ(result.output, "crackle: error: " + bad.message + "\n");
+  }
+  EXPECT_EQ(crackle("").exit_code, 2);  // a command is required
+  EXPECT_FALSE(fs::exists("out"));      // nothing ran
+}
+
+TEST(CliEdges, HelpAndVersionExitZeroAndDocumentTheChannels) {
+  const Result version = crackle("--version");
+  EXPECT_EQ(version.exit_code, 0);
+  EXPECT_EQ(version.output, "crackle 0.1.0\n");
+  const Result help = crackle("--help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.output.find("Exit codes: 0 done; 2 bad input"), std::string::npos) << help.output;
+  for (const std::string command : {"modal", "run"}) {
+    const Result result = crackle(command + " --help");
+    EXPECT_EQ(result.exit_code, 0);
+    EXPECT_NE(result.output.find("--petsc"), std::string::npos) << result.output;
+    EXPECT_NE(result.output.find("PETSc/SLEPc options go after --"), std::string::npos) << result.output;
+  }
+  EXPECT_EQ(crackle("study --help").exit_code, 0);
+}
+
+TEST(CliEdges, PetscOptionsPassAfterTheSeparatorOrWithPetsc) {
+  const fs::path scene = small_scene();
+  const std::string out = (fs::temp_directory_path() / ("crackle-cli-edges-out-" + std::to_string(::getpid()))).string();
+  for (const std::string channel : {"-- -eps_view", "--petsc -eps_view", "--petsc=\"-eps_view -eps_tol 1e-9\""}) {
+    SCOPED_TRACE(channel);
+    const Result result = crackle("modal " + scene.string() + " -o " + out + " " + channel);
+    EXPECT_EQ(result.exit_code, 0) << result.output;
+    EXPECT_NE(result.output.find("EPS Object"), std::string::npos) << result.output;
+  }
+  const Result environment = crackle("modal " + scene.string() + " -o " + out, "PETSC_OPTIONS=-eps_view");
+  EXPECT_EQ(environment.exit_code, 0) << environment.output;
+  EXPECT_NE(environment.output.find("EPS Object"), std::string::npos);
+  fs::remove_all(out);
+  fs::remove(scene);
+}
+
+TEST(CliEdges, RunRefusesSeveralMpiRanksWithOneMessage) {
+  // The launcher's environment as mpirun -np 2 sets it, without starting MPI: rank 0 says why,
+  // rank 1 exits quietly with the same code, and nothing is written.
+  const std::string out = (fs::temp_directory_path() / ("crackle-cli-edges-mpi-" + std::to_string(::getpid()))).string();
+  const std::string run = "run " + data("beam.yaml") + " -o " + out;
+  for (const std::string launcher : {"OMPI_COMM_WORLD_SIZE=2 OMPI_COMM_WORLD_RANK=", "PMI_SIZE=2 PMI_RANK="}) {
+    const Result rank0 = crackle(run, launcher + "0");
+    EXPECT_EQ(rank0.exit_code, 2);
+    EXPECT_EQ(rank0.output,
+              "crackle: error: crackle run is a single-process job, got 2 MPI processes (each would run the whole "
+              "job into the same folder); run it without mpirun (crackle modal runs under mpirun; crackle study "
+              "spreads cases over the ranks)\n");
+    const Result rank1 = crackle(run, launcher + "1");
+    EXPECT_EQ(rank1.exit_code, 2);
+    EXPECT_EQ(rank1.output, "");
+  }
+  EXPECT_FALSE(fs::exists(out));
+  // One rank is one process: the scene is read as usual.
+  EXPECT_EQ(crackle("check " + data("beam.yaml"), "OMPI_COMM_WORLD_SIZE=1 OMPI_COMM_WORLD_RANK=0").exit_code, 0);
+}
+
+}  // namespace

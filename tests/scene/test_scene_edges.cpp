@@ -1,0 +1,91 @@
+// Scenes at the edges: probe names that must become file names and CSV columns, paths that are
+// folders, a scalar frequency that keeps its line, and nested YAML aliases.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/errors.hpp"
+#include "scene/scene.hpp"
+
+namespace crackle::scene {
+namespace {
+
+/// Lines 1-9; the probe's name on line 9.
+std::string with_probe(const std::string& name, const std::string& frequency = "100.0") {
+  return "mesh:\n  box: {size: [0.2, 0.02, 0.01], cells: [8, 1, 1], order: 1}\n"
+         "material: {E: 210.0e9, nu: 0.3, rho: 7850.0}\n"
+         "transient:\n"
+         "  excitation: {face: x+, amplitude: 1.0, frequency: " + frequency + "}\n"
+         "  periods: 2\n"
+         "  probes:\n"
+         "    - {name: tip, point: [0.2, 0.01, 0.01]}\n"
+         "    - {name: " + name + ", point: [0.1, 0.01, 0.01]}\n";
+}
+
+std::string error_of(const std::string& text) {
+  try {
+    parse_scene(text, "edge.yaml");
+  } catch (const InputError& error) {
+    return error.what();
+  }
+  return "(no error)";
+}
+
+TEST(SceneEdges, ProbeNamesAreFileSafe) {
+  EXPECT_EQ(error_of(with_probe("tip.z_2-B")), "(no error)");
+  const std::string expected = "edge.yaml:9: transient.probes[1].name: expected a name of letters, digits, _ . - "
+                               "(it names output files and CSV columns), got ";
+  EXPECT_EQ(error_of(with_probe("a/b")), expected + "'a/b'");
+  EXPECT_EQ(error_of(with_probe("\"a,b\"")), expected + "'a,b'");
+  EXPECT_EQ(error_of(with_probe("'say \"hi\"'")), expected + "'say \"hi\"'");
+  EXPECT_EQ(error_of(with_probe("\"two\\nlines\"")), expected + "'two\\nlines'");
+  EXPECT_EQ(error_of(with_probe("\"..\"")), expected + "'..'");
+}
+
+TEST(SceneEdges, AScalarFrequencyKeepsItsLine) {
+  for (const char* bad : {"0", ".nan", ".inf", "-5"}) {
+    EXPECT_EQ(error_of(with_probe("mid", bad)),
+              std::string("edge.yaml:5: transient.excitation.frequency.hz: expected a positive number, got ") + bad);
+  }
+  // An override carries no line, as before.
+  try {
+    parse_scene(with_probe("mid"), "edge.yaml", {{"transient.excitation.frequency", "0"}});
+    FAIL() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_STREQ(error.what(), "edge.yaml: transient.excitation.frequency.hz: expected a positive number, got 0");
+  }
+}
+
+TEST(SceneEdges, FoldersAreNotFiles) {
+  const std::string folder = std::filesystem::temp_directory_path().string();
+  try {
+    load_scene(folder);
+    FAIL() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_EQ(std::string(error.what()), folder + ": expected a readable scene file, got a directory");
+  }
+  EXPECT_EQ(error_of("mesh: {gmsh: " + folder + "}\nmaterial: {E: 210.0e9, nu: 0.3, rho: 7850.0}\n"),
+            "edge.yaml:1: mesh.gmsh: expected a Gmsh mesh file, got a directory, '" + folder + "'");
+}
+
+TEST(SceneEdges, NestedAliasesAreBounded) {
+  std::string text = "mesh:\n  box: {size: [0.2, 0.02, 0.01], cells: [8, 1, 1], order: 1}\n"
+                     "material: {E: 210.0e9, nu: 0.3, rho: 7850.0}\n"
+                     "transient:\n  initial:\n    - {velocity: &v0 [1, 1, 1]}\n";
+  // 9 levels of 9 aliases: 9^9 lists once expanded, in 8 lines, under transient.initial[0].x.
+  text += "    - x: [&l1 [*v0, *v0, *v0, *v0, *v0, *v0, *v0, *v0, *v0]";
+  for (int level = 2; level <= 9; ++level) {
+    const std::string alias = "*l" + std::to_string(level - 1);
+    text += ", &l" + std::to_string(level) + " [";
+    for (int i = 0; i < 9; ++i) text += (i ? ", " : "") + alias;
+    text += "]";
+  }
+  text += "]\n";
+  EXPECT_EQ(error_of(text),
+            "edge.yaml:5: transient.initial[1]: expected at most 1000000 YAML nodes with aliases expanded, got "
+            "more (nested aliases?)");
+}
+
+}  // namespace
+}  // namespace crackle::scene
