@@ -1,0 +1,498 @@
+#include "sweep/harmonic_balance.hpp"
+
+#include <fftw3.h>
+
+#include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <string>
+
+#include "contact/penalty.hpp"
+#include "core/errors.hpp"
+
+namespace crackle::sweep {
+
+namespace {
+
+using Complex = std::complex<double>;
+constexpr double kPi = 3.14159265358979323846;
+
+int default_samples(int harmonics) {
+  int n = 16;
+  while (n < 4 * harmonics) n *= 2;
+  return n;
+}
+
+/// Receptances of one harmonic: H(omega_k) (c x c) and E(omega_k) (c), with their Omega derivatives.
+struct HarmonicReceptance {
+  ComplexMatrixX pairs;
+  ComplexVectorX load;
+  ComplexMatrixX pairs_d;  ///< dH/dOmega
+  ComplexVectorX load_d;   ///< dE/dOmega
+};
+
+}  // namespace
+
+struct HarmonicBalance::Impl {
+  const reduced::ReducedSystem& system;
+  HarmonicBalanceOptions options;
+  Index c = 0;
+  Index m = 0;
+  int H = 0;
+  int N = 0;
+  int nu = 1;
+  double scale = 1.0;
+  VectorX stiffness;  ///< eps_N A per row
+  fftw_plan forward = nullptr;   ///< r2c, N -> N/2+1
+  fftw_plan backward = nullptr;  ///< c2r
+
+  Impl(const reduced::ReducedSystem& s, const HarmonicBalanceOptions& o) : system(s), options(o) {}
+  ~Impl() {
+    if (forward) fftw_destroy_plan(forward);
+    if (backward) fftw_destroy_plan(backward);
+  }
+
+  Index n_unknowns() const { return c * (2 * H + 1); }
+
+  /// D_r(omega) and dD_r/domega; rigid modes are left out of the static (omega = 0) receptance.
+  void modal_receptance(double omega, ComplexVectorX& d, ComplexVectorX& d_omega) const {
+    d.resize(m);
+    d_omega.resize(m);
+    for (Index r = 0; r < m; ++r) {
+      const double w = system.omega[r];
+      const double zeta = system.damping_ratio(r);
+      const Complex den(w * w - omega * omega, 2.0 * zeta * w * omega);
+      if (std::abs(den) == 0.0) {
+        d[r] = 0.0;
+        d_omega[r] = 0.0;
+        continue;
+      }
+      d[r] = 1.0 / den;
+      d_omega[r] = Complex(2.0 * omega, -2.0 * zeta * w) / (den * den);
+    }
+  }
+
+  std::vector<HarmonicReceptance> receptances(double omega, bool derivatives) const {
+    std::vector<HarmonicReceptance> out(H + 1);
+    const MatrixX& bphi = system.pair_modes;
+    for (int k = 0; k <= H; ++k) {
+      const double wk = k * omega / nu;
+      ComplexVectorX d, dd;
+      modal_receptance(wk, d, dd);
+      HarmonicReceptance& h = out[k];
+      const ComplexMatrixX scaled = bphi.cast<Complex>() * d.asDiagonal();
+      h.pairs = scaled * bphi.transpose().cast<Complex>();
+      h.pairs += system.residual.cast<Complex>();
+      h.load = scaled * system.load_modal.cast<Complex>() + system.load_residual.cast<Complex>();
+      if (derivatives) {
+        const double dk = static_cast<double>(k) / nu;  // d omega_k / d Omega
+        const ComplexMatrixX scaled_d = bphi.cast<Complex>() * (dd * dk).asDiagonal();
+        h.pairs_d = scaled_d * bphi.transpose().cast<Complex>();
+        h.load_d = scaled_d * system.load_modal.cast<Complex>();
+      }
+    }
+    return out;
+  }
+
+  /// Complex amplitude of harmonic k of row i from the real layout (k = 0: the mean).
+  Complex amplitude(const VectorX& x, int k, Index i) const {
+    if (k == 0) return x[i];
+    return Complex(x[(2 * k - 1) * c + i], -x[(2 * k) * c + i]);
+  }
+  void set_amplitude(VectorX& x, int k, Index i, Complex value) const {
+    if (k == 0) {
+      x[i] = value.real();
+      return;
+    }
+    x[(2 * k - 1) * c + i] = value.real();
+    x[(2 * k) * c + i] = -value.imag();
+  }
+
+  /// Time samples (c x N, row-major by row) of a harmonic vector.
+  MatrixX to_time(const VectorX& x) const {
+    MatrixX samples(c, N);
+    std::vector<fftw_complex> spectrum(N / 2 + 1);
+    std::vector<double> signal(N);
+    for (Index i = 0; i < c; ++i) {
+      for (auto& s : spectrum) s[0] = s[1] = 0.0;
+      spectrum[0][0] = x[i];
+      for (int k = 1; k <= H; ++k) {
+        const Complex a = amplitude(x, k, i) * 0.5;
+        spectrum[k][0] = a.real();
+        spectrum[k][1] = a.imag();
+      }
+      fftw_execute_dft_c2r(backward, spectrum.data(), signal.data());
+      for (int j = 0; j < N; ++j) samples(i, j) = signal[j];
+    }
+    return samples;
+  }
+
+  /// Harmonics 0..H of time samples (c x N), real layout.
+  VectorX to_harmonics(const MatrixX& samples) const {
+    VectorX x = VectorX::Zero(n_unknowns());
+    std::vector<fftw_complex> spectrum(N / 2 + 1);
+    std::vector<double> signal(N);
+    for (Index i = 0; i < c; ++i) {
+      for (int j = 0; j < N; ++j) signal[j] = samples(i, j);
+      fftw_execute_dft_r2c(forward, signal.data(), spectrum.data());
+      x[i] = spectrum[0][0] / N;
+      for (int k = 1; k <= H; ++k)
+        set_amplitude(x, k, i, Complex(spectrum[k][0], spectrum[k][1]) * (2.0 / N));
+    }
+    return x;
+  }
+
+  /// Contact law at the samples: forces (c x N) and, optionally, dlaw/dg.
+  MatrixX law(const MatrixX& gaps, MatrixX* slope) const {
+    MatrixX p(c, N);
+    if (slope) slope->setZero(c, N);
+    for (Index i = 0; i < c; ++i)
+      for (int j = 0; j < N; ++j) {
+        p(i, j) = contact::penalty_pressure(gaps(i, j), stiffness[i]);
+        if (slope && gaps(i, j) < 0.0) (*slope)(i, j) = -stiffness[i];
+      }
+    return p;
+  }
+
+  VectorX forces(const VectorX& gaps) const { return to_harmonics(law(to_time(gaps), nullptr)); }
+
+  /// Linear part: g0 delta_k0 + H P + E F, in [m].
+  VectorX apply(const std::vector<HarmonicReceptance>& rec, const VectorX& p, bool derivative) const {
+    VectorX g = VectorX::Zero(n_unknowns());
+    ComplexVectorX pk(c);
+    for (int k = 0; k <= H; ++k) {
+      for (Index i = 0; i < c; ++i) pk[i] = amplitude(p, k, i);
+      const ComplexMatrixX& hk = derivative ? rec[k].pairs_d : rec[k].pairs;
+      ComplexVectorX gk = (k == 0 ? ComplexMatrixX(hk.real().cast<Complex>()) : hk) * pk;
+      if (k == nu) gk += derivative ? rec[k].load_d : rec[k].load;
+      for (Index i = 0; i < c; ++i) set_amplitude(g, k, i, gk[i]);
+    }
+    if (!derivative)
+      for (Index i = 0; i < c; ++i) g[i] += system.initial_gap[i];
+    return g;
+  }
+
+  /// Block of dP/dG of one row (2H+1 square, component order 0, a_1, b_1, ...), from the DFT of the slope.
+  MatrixX force_derivative(const MatrixX& slope, Index i) const {
+    std::vector<double> signal(N);
+    std::vector<fftw_complex> spectrum(N / 2 + 1);
+    for (int j = 0; j < N; ++j) signal[j] = slope(i, j);
+    fftw_execute_dft_r2c(forward, signal.data(), spectrum.data());
+    VectorX dc(2 * H + 1), ds(2 * H + 1);
+    for (int k = 0; k <= 2 * H; ++k) {
+      dc[k] = spectrum[k][0] / N;
+      ds[k] = -spectrum[k][1] / N;
+    }
+    auto cosc = [&](int k) { return dc[std::abs(k)]; };
+    auto sinc = [&](int k) { return k >= 0 ? ds[k] : -ds[-k]; };
+    const int n = 2 * H + 1;
+    MatrixX block(n, n);
+    block(0, 0) = dc[0];
+    for (int mm = 1; mm <= H; ++mm) {
+      block(0, 2 * mm - 1) = dc[mm];
+      block(0, 2 * mm) = ds[mm];
+    }
+    for (int l = 1; l <= H; ++l) {
+      block(2 * l - 1, 0) = 2.0 * dc[l];
+      block(2 * l, 0) = 2.0 * ds[l];
+      for (int mm = 1; mm <= H; ++mm) {
+        block(2 * l - 1, 2 * mm - 1) = cosc(l - mm) + cosc(l + mm);
+        block(2 * l - 1, 2 * mm) = sinc(mm + l) + sinc(mm - l);
+        block(2 * l, 2 * mm - 1) = sinc(l + mm) + sinc(l - mm);
+        block(2 * l, 2 * mm) = cosc(l - mm) - cosc(l + mm);
+      }
+    }
+    return block;
+  }
+
+  /// Scaled Jacobian I - H dP/dG.
+  MatrixX jacobian(const std::vector<HarmonicReceptance>& rec, const VectorX& gaps) const {
+    MatrixX slope;
+    law(to_time(gaps), &slope);
+    const Index n = n_unknowns();
+    MatrixX jac = MatrixX::Identity(n, n);
+    const int nc = 2 * H + 1;
+    for (Index j = 0; j < c; ++j) {
+      if (slope.row(j).cwiseAbs().maxCoeff() == 0.0) continue;
+      const MatrixX block = force_derivative(slope, j);
+      for (int col = 0; col < nc; ++col) {
+        auto column = jac.col(col * c + j);
+        // k = 0 rows
+        column.segment(0, c) -= rec[0].pairs.col(j).real() * block(0, col);
+        for (int k = 1; k <= H; ++k) {
+          const VectorX re = rec[k].pairs.col(j).real();
+          const VectorX im = rec[k].pairs.col(j).imag();
+          const double ja = block(2 * k - 1, col);
+          const double jb = block(2 * k, col);
+          column.segment((2 * k - 1) * c, c) -= re * ja + im * jb;
+          column.segment((2 * k) * c, c) -= -im * ja + re * jb;
+        }
+      }
+    }
+    return jac;
+  }
+
+  VectorX residual(const std::vector<HarmonicReceptance>& rec, const VectorX& gaps) const {
+    return (gaps - apply(rec, forces(gaps), false)) / scale;
+  }
+};
+
+// ---------------------------------------------------------------------------------------------
+
+double Solution::amplitude(Index row, double order) const { return std::abs(outputs(row, std::lround(order * subharmonic))); }
+
+double Solution::phase(Index row, double order) const { return std::arg(outputs(row, std::lround(order * subharmonic))); }
+
+HarmonicBalance::HarmonicBalance(const reduced::ReducedSystem& system, const HarmonicBalanceOptions& options)
+    : impl_(std::make_unique<Impl>(system, options)) {
+  Impl& d = *impl_;
+  if (system.friction)
+    throw InputError("harmonic balance: friction (3 rows per pair) is not implemented yet; set friction off");
+  if (options.harmonics < 1) throw InputError("harmonic balance: harmonics must be >= 1, got " + std::to_string(options.harmonics));
+  if (options.subharmonic != 1 && options.subharmonic != 2)
+    throw InputError("harmonic balance: subharmonic must be 1 or 2, got " + std::to_string(options.subharmonic));
+  d.c = system.n_rows();
+  d.m = system.n_modes();
+  d.H = options.harmonics;
+  d.nu = options.subharmonic;
+  d.N = options.time_samples > 0 ? options.time_samples : default_samples(d.H);
+  if (d.N < 4 * d.H)
+    throw InputError("harmonic balance: time_samples " + std::to_string(d.N) + " < 4 H = " + std::to_string(4 * d.H));
+  if (system.pair_modes.rows() != d.c || system.pair_modes.cols() != d.m || system.residual.rows() != d.c ||
+      system.residual.cols() != d.c || system.load_modal.size() != d.m || system.load_residual.size() != d.c ||
+      system.initial_gap.size() != d.c)
+    throw InputError("harmonic balance: the reduced system's sizes are inconsistent (m = " + std::to_string(d.m) +
+                     ", c = " + std::to_string(d.c) + ")");
+  d.stiffness = system.normal_penalty * system.pair_area;
+
+  std::vector<double> signal(d.N);
+  std::vector<fftw_complex> spectrum(d.N / 2 + 1);
+  d.forward = fftw_plan_dft_r2c_1d(d.N, signal.data(), spectrum.data(), FFTW_ESTIMATE | FFTW_UNALIGNED);
+  d.backward = fftw_plan_dft_c2r_1d(d.N, spectrum.data(), signal.data(), FFTW_ESTIMATE | FFTW_UNALIGNED);
+
+  if (options.gap_scale > 0.0) {
+    d.scale = options.gap_scale;
+  } else {
+    double s = d.c > 0 ? system.initial_gap.cwiseAbs().maxCoeff() : 0.0;
+    ComplexVectorX dr, dd;
+    d.modal_receptance(0.0, dr, dd);
+    const VectorX static_gap = system.pair_modes * (dr.real().asDiagonal() * system.load_modal) + system.load_residual;
+    if (d.c > 0) s = std::max(s, static_gap.cwiseAbs().maxCoeff());
+    d.scale = s > 0.0 ? s : 1e-6;
+  }
+}
+
+HarmonicBalance::~HarmonicBalance() = default;
+
+Index HarmonicBalance::n_rows() const { return impl_->c; }
+int HarmonicBalance::n_harmonics() const { return impl_->H; }
+int HarmonicBalance::n_samples() const { return impl_->N; }
+Index HarmonicBalance::n_unknowns() const { return impl_->n_unknowns(); }
+double HarmonicBalance::gap_scale() const { return impl_->scale; }
+const HarmonicBalanceOptions& HarmonicBalance::options() const { return impl_->options; }
+
+VectorX HarmonicBalance::linear_gaps(double omega) const {
+  return impl_->apply(impl_->receptances(omega, false), VectorX::Zero(n_unknowns()), false);
+}
+
+VectorX HarmonicBalance::pair_forces(const VectorX& gaps) const { return impl_->forces(gaps); }
+
+VectorX HarmonicBalance::residual(double omega, const VectorX& gaps) const {
+  return impl_->residual(impl_->receptances(omega, false), gaps);
+}
+
+MatrixX HarmonicBalance::jacobian(double omega, const VectorX& gaps, VectorX* d_omega) const {
+  const auto rec = impl_->receptances(omega, d_omega != nullptr);
+  if (d_omega) *d_omega = -impl_->apply(rec, impl_->forces(gaps), true) / impl_->scale;
+  return impl_->jacobian(rec, gaps);
+}
+
+Solution HarmonicBalance::solve(double omega, const VectorX& guess) const {
+  const Impl& d = *impl_;
+  const auto rec = d.receptances(omega, false);
+  Solution sol;
+  sol.omega = omega;
+  sol.subharmonic = d.nu;
+  sol.gaps = guess.size() == d.n_unknowns() ? guess : linear_gaps(omega);
+  VectorX r = d.residual(rec, sol.gaps);
+  double norm = r.lpNorm<Eigen::Infinity>();
+  int it = 0;
+  while (norm > d.options.tolerance && it < d.options.max_iterations) {
+    ++it;
+    const VectorX step = d.jacobian(rec, sol.gaps).partialPivLu().solve(-r) * d.scale;
+    // backtracking on the 2-norm of the residual
+    double alpha = 1.0;
+    VectorX trial = sol.gaps + step;
+    VectorX r_trial = d.residual(rec, trial);
+    while (r_trial.norm() > r.norm() && alpha > 1.0 / 64.0) {
+      alpha *= 0.5;
+      trial = sol.gaps + alpha * step;
+      r_trial = d.residual(rec, trial);
+    }
+    sol.gaps = trial;
+    r = r_trial;
+    norm = r.lpNorm<Eigen::Infinity>();
+  }
+  sol.iterations = it;
+  sol.residual = norm;
+  sol.converged = norm <= d.options.tolerance;
+  if (!sol.converged)
+    throw SolverError("harmonic balance: Newton did not converge at Omega = " + format_number(omega) +
+                      " rad/s: residual " + format_number(norm) + " after " + std::to_string(it) + " iterations");
+  complete(sol);
+  return sol;
+}
+
+void HarmonicBalance::complete(Solution& sol) const {
+  const Impl& d = *impl_;
+  const reduced::ReducedSystem& s = d.system;
+  sol.subharmonic = d.nu;
+  sol.forces = d.forces(sol.gaps);
+  const Index o = s.n_outputs();
+  sol.modal.resize(d.m, d.H + 1);
+  sol.outputs.resize(o, d.H + 1);
+  ComplexVectorX pk(d.c);
+  sol.rigid_imbalance = 0.0;
+  for (int k = 0; k <= d.H; ++k) {
+    ComplexVectorX dr, dd;
+    d.modal_receptance(k * sol.omega / d.nu, dr, dd);
+    for (Index i = 0; i < d.c; ++i) pk[i] = d.amplitude(sol.forces, k, i);
+    const Complex load = k == d.nu ? 1.0 : 0.0;
+    const ComplexVectorX modal_force = s.pair_modes.transpose().cast<Complex>() * pk + s.load_modal.cast<Complex>() * load;
+    if (k == 0)
+      for (Index r = 0; r < d.m; ++r)
+        if (s.omega[r] == 0.0) sol.rigid_imbalance = std::max(sol.rigid_imbalance, std::abs(modal_force[r]));
+    sol.modal.col(k) = dr.cwiseProduct(modal_force);
+    if (o > 0)
+      sol.outputs.col(k) = s.output_modes.cast<Complex>() * sol.modal.col(k) +
+                           s.output_residual_pairs.cast<Complex>() * pk + s.output_residual_load.cast<Complex>() * load;
+  }
+  // H-convergence: share of the gap response in the top harmonics
+  const int first_top = std::min(d.H, std::max(1, static_cast<int>(std::ceil((1.0 - d.options.top_share) * d.H)) + 0));
+  double total = 0.0, top = 0.0;
+  for (int k = 1; k <= d.H; ++k)
+    for (Index i = 0; i < d.c; ++i) {
+      const double a2 = std::norm(d.amplitude(sol.gaps, k, i) - (k == d.nu ? Complex(0.0) : Complex(0.0)));
+      total += a2;
+      if (k > first_top || k == d.H) top += a2;
+    }
+  sol.top_harmonic_share = total > 0.0 ? std::sqrt(top / total) : 0.0;
+  sol.harmonics_flagged = sol.top_harmonic_share > d.options.top_threshold;
+}
+
+Stability HarmonicBalance::hill_stability(const Solution& sol, double tolerance) const {
+  const Impl& d = *impl_;
+  const reduced::ReducedSystem& s = d.system;
+  const Index m = d.m;
+  const int H = d.H;
+  const int N = d.N;
+  const double w0 = sol.omega / d.nu;
+  if (tolerance <= 0.0) {
+    double wmin = 0.0;
+    for (Index r = 0; r < m; ++r)
+      if (s.omega[r] > 0.0 && (wmin == 0.0 || s.omega[r] < wmin)) wmin = s.omega[r];
+    tolerance = 1e-6 * (wmin > 0.0 ? wmin : w0);
+  }
+  // contact stiffness condensed through the massless boundary, in modal coordinates, per sample
+  const MatrixX gaps = d.to_time(sol.gaps);
+  std::vector<MatrixX> stiff(N, MatrixX::Zero(m, m));
+  for (int j = 0; j < N; ++j) {
+    std::vector<Index> active;
+    for (Index i = 0; i < d.c; ++i)
+      if (gaps(i, j) < 0.0 && d.stiffness[i] > 0.0) active.push_back(i);
+    if (active.empty()) continue;
+    const Index na = static_cast<Index>(active.size());
+    MatrixX flex(na, na);
+    MatrixX bphi(na, m);
+    for (Index a = 0; a < na; ++a) {
+      for (Index b = 0; b < na; ++b) flex(a, b) = s.residual(active[a], active[b]);
+      flex(a, a) += 1.0 / d.stiffness[active[a]];
+      bphi.row(a) = s.pair_modes.row(active[a]);
+    }
+    stiff[j] = bphi.transpose() * flex.ldlt().solve(bphi);
+  }
+  // Fourier coefficients K_j = (1/N) sum_n K(tau_n) e^{-i j tau_n}, j = 0..2H
+  std::vector<ComplexMatrixX> khat(2 * H + 1, ComplexMatrixX::Zero(m, m));
+  for (int jj = 0; jj <= 2 * H; ++jj)
+    for (int n = 0; n < N; ++n) {
+      if (stiff[n].size() == 0 || stiff[n].cwiseAbs().maxCoeff() == 0.0) continue;
+      const Complex e = std::polar(1.0 / N, -2.0 * kPi * jj * n / N);
+      khat[jj] += e * stiff[n].cast<Complex>();
+    }
+  auto coefficient = [&](int jj) -> ComplexMatrixX { return jj >= 0 ? khat[jj] : ComplexMatrixX(khat[-jj].conjugate()); };
+  const Index size = m * (2 * H + 1);
+  ComplexMatrixX m0 = ComplexMatrixX::Zero(size, size);
+  ComplexMatrixX m1 = ComplexMatrixX::Zero(size, size);
+  for (int k = -H; k <= H; ++k) {
+    const Index bk = (k + H) * m;
+    for (int l = -H; l <= H; ++l) m0.block(bk, (l + H) * m, m, m) = coefficient(k - l);
+    for (Index r = 0; r < m; ++r) {
+      const double damping = 2.0 * s.damping_ratio(r) * s.omega[r];
+      const Complex ik(0.0, k * w0);
+      m0(bk + r, bk + r) += s.omega[r] * s.omega[r] + ik * ik + ik * damping;
+      m1(bk + r, bk + r) = 2.0 * ik + damping;
+    }
+  }
+  ComplexMatrixX companion = ComplexMatrixX::Zero(2 * size, 2 * size);
+  companion.topRightCorner(size, size).setIdentity();
+  companion.bottomLeftCorner(size, size) = -m0;
+  companion.bottomRightCorner(size, size) = -m1;
+  Eigen::ComplexEigenSolver<ComplexMatrixX> eig(companion, true);
+  if (eig.info() != Eigen::Success) throw SolverError("Hill's method: the eigen-solve failed at Omega = " + format_number(sol.omega));
+  // select the exponents whose eigenvectors concentrate in the central harmonics, one per family
+  struct Candidate {
+    Complex lambda;
+    double centroid;
+  };
+  std::vector<Candidate> candidates;
+  for (Index e = 0; e < 2 * size; ++e) {
+    const auto v = eig.eigenvectors().col(e).head(size);
+    double wsum = 0.0, ksum = 0.0;
+    for (int k = -H; k <= H; ++k) {
+      const double w = v.segment((k + H) * m, m).squaredNorm();
+      wsum += w;
+      ksum += k * w;
+    }
+    candidates.push_back({eig.eigenvalues()[e], wsum > 0.0 ? std::abs(ksum / wsum) : 1e300});
+  }
+  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) { return a.centroid < b.centroid; });
+  Stability st;
+  std::vector<Complex> chosen;
+  const double family_tol = 1e-6 * std::max(w0, 1.0);
+  for (const Candidate& cand : candidates) {
+    if (static_cast<Index>(chosen.size()) == 2 * m) break;
+    bool same_family = false;
+    for (const Complex& other : chosen) {
+      const double shift = (cand.lambda.imag() - other.imag()) / w0;
+      if (std::abs(cand.lambda.real() - other.real()) < family_tol && std::abs(shift - std::round(shift)) < 1e-6 &&
+          std::lround(shift) != 0)
+        same_family = true;
+    }
+    if (!same_family) chosen.push_back(cand.lambda);
+  }
+  const Index count = static_cast<Index>(chosen.size());
+  st.exponents.resize(count);
+  st.multipliers.resize(count);
+  const double period = 2.0 * kPi / w0;
+  st.max_real_part = -1e300;
+  for (Index e = 0; e < count; ++e) {
+    st.exponents[e] = chosen[e];
+    st.multipliers[e] = std::exp(chosen[e] * period);
+    st.max_real_part = std::max(st.max_real_part, chosen[e].real());
+    if (chosen[e].real() > tolerance) {
+      const double angle = std::arg(st.multipliers[e]);
+      if (std::abs(angle) < 1e-4)
+        ++st.unstable_positive;
+      else if (kPi - std::abs(angle) < 1e-4)
+        ++st.unstable_negative;
+      else
+        ++st.unstable_complex;
+    }
+  }
+  st.stable = st.max_real_part <= tolerance;
+  return st;
+}
+
+}  // namespace crackle::sweep
