@@ -28,6 +28,13 @@ Extended evaluate(const HarmonicBalance& hb, const VectorX& y, double omega_ref)
   return e;
 }
 
+double extended_merit(const HarmonicBalance& hb, const VectorX& y, double omega_ref, const VectorX& t,
+                      const VectorX& y_prev, double ds) {
+  const Index n = hb.n_unknowns();
+  const double constraint = t.dot(y - y_prev) - ds;
+  return hb.residual(y[n] * omega_ref, y.head(n) * hb.gap_scale()).squaredNorm() + constraint * constraint;
+}
+
 /// Unit tangent: null vector of the n x (n+1) Jacobian, oriented along `previous`.
 VectorX tangent(const MatrixX& jacobian, const VectorX& previous) {
   const Index n = jacobian.rows();
@@ -105,7 +112,18 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
         rhs.head(n) = -c.residual;
         rhs[n] = -(t.dot(y_new - y) - ds);
         const VectorX delta = a.partialPivLu().solve(rhs);
-        y_new += delta;
+        // backtracking on the extended residual: piecewise-linear contact makes plain Newton cycle
+        // between two active-sample patterns near a kink
+        const double merit = rhs.squaredNorm();
+        double alpha = 1.0;
+        VectorX trial = y_new + delta;
+        while (alpha > 1.0 / 256.0) {
+          const double m_trial = extended_merit(hb, trial, omega_ref, t, y, ds);
+          if (m_trial < merit) break;
+          alpha *= 0.5;
+          trial = y_new + alpha * delta;
+        }
+        y_new = trial;
         if (!y_new.allFinite()) break;
         const double res = hb.residual(y_new[n] * omega_ref, y_new.head(n) * hb.gap_scale()).lpNorm<Eigen::Infinity>();
         if (res <= tolerance && delta.lpNorm<Eigen::Infinity>() <= 1e3 * tolerance + 1e-8) {

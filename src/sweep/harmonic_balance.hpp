@@ -37,7 +37,7 @@ using ComplexMatrixX = Eigen::MatrixXcd;
 struct HarmonicBalanceOptions {
   int harmonics = 10;        ///< H: harmonics 0..H of the base frequency Omega/nu
   int subharmonic = 1;       ///< nu: 1, or 2 for period-doubled branches
-  int time_samples = 0;      ///< N samples per period for AFT; 0 = smallest power of two >= 4H (at least 16)
+  int time_samples = 0;      ///< N samples per period for AFT; 0 = smallest power of two >= max(4H, 4096)
   double gap_scale = 0.0;    ///< scale of the gap unknowns [m]; 0 = automatic (max |g0|, static gap response)
   double tolerance = 1e-10;  ///< Newton converged when the scaled residual max norm is below this
   int max_iterations = 50;   ///< Newton iterations per solve

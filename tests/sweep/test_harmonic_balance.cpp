@@ -9,6 +9,7 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <cstdlib>
 
 #include "sweep/harmonic_balance.hpp"
 
@@ -209,6 +210,89 @@ TEST(HarmonicBalance, BilinearOscillatorMatchesTimeIntegration) {
       if (harmonics == 5) EXPECT_GT(err[0] + err[1] + err[2], 1e-6);  // the truncation shows
     }
   }
+}
+
+
+TEST(Continuation, FoldOfAHardeningClearanceOscillator) {
+  // Open at rest with a clearance g0 = 5 um, light damping (Q = 50): once |q| > g0 the contact
+  // stiffens the oscillator (w = 1 open, 2 closed), the resonance bends to the right and the branch
+  // turns back twice.
+  const auto s = one_dof(1.0, 0.01, 1.0, 0.0, 0.5e-6, 0.0, 3.0, 5e-6);
+  HarmonicBalanceOptions opt;
+  opt.harmonics = 10;
+  HarmonicBalance hb(s, opt);
+  ContinuationOptions copt;
+  copt.initial_step = 0.05;
+  copt.max_step = 0.1;
+  const auto branch = continue_branch(hb, 0.6, 1.8, copt);
+  ASSERT_GT(branch.size(), 10u);
+  EXPECT_GT(branch.back().solution.omega, 1.8);
+  std::vector<std::size_t> folds;
+  for (std::size_t i = 0; i < branch.size(); ++i) {
+    const auto& p = branch[i];
+    EXPECT_TRUE(p.solution.converged);
+    if (p.fold) folds.push_back(i);
+    if (p.fold || p.stability_change || i % 10 == 0)
+      std::printf("    Omega %.5f A1 %.4e  dOmega/ds %+.3f  max Re lambda %+.2e  unstable +%d -%d c%d%s%s\n",
+                  p.solution.omega, p.solution.amplitude(0, 1.0), p.tangent_omega, p.stability.max_real_part,
+                  p.stability.unstable_positive, p.stability.unstable_negative, p.stability.unstable_complex,
+                  p.fold ? " FOLD" : "", p.stability_change ? " STABILITY CHANGE" : "");
+  }
+  std::printf("  %zu points, %zu folds\n", branch.size(), folds.size());
+  ASSERT_EQ(folds.size(), 2u);
+  const double omega_upper = branch[folds[0]].solution.omega;
+  const double omega_lower = branch[folds[1]].solution.omega;
+  EXPECT_GT(omega_upper - omega_lower, 0.1);  // the branch turns back in frequency
+  // Hill: stable outside the folds, unstable (one real multiplier > 1) between them
+  for (std::size_t i = 0; i < branch.size(); ++i) {
+    const bool middle = i >= folds[0] && i < folds[1];
+    EXPECT_EQ(branch[i].stability.stable, !middle) << "point " << i << " Omega " << branch[i].solution.omega;
+    if (middle) {
+      EXPECT_EQ(branch[i].stability.unstable_positive, 1);
+      EXPECT_EQ(branch[i].stability.unstable_negative + branch[i].stability.unstable_complex, 0);
+    }
+    EXPECT_TRUE(branch[i].stability_change == (i == folds[0] || i == folds[1])) << "point " << i;
+  }
+
+  // Three coexisting solutions at Omega = 1.15: Newton from the nearest point of each part.
+  const double omega = 1.15;
+  auto nearest = [&](std::size_t from, std::size_t to) {
+    std::size_t best = from;
+    for (std::size_t i = from; i < to; ++i)
+      if (std::abs(branch[i].solution.omega - omega) < std::abs(branch[best].solution.omega - omega)) best = i;
+    return hb.solve(omega, branch[best].solution.gaps);
+  };
+  const Solution lower = nearest(0, folds[0]);
+  const Solution middle = nearest(folds[0], folds[1]);
+  const Solution upper = nearest(folds[1], branch.size());
+  // nearest(0, folds[0]) lies on the resonant (high) part before the upper fold
+  const double a_high = lower.amplitude(0, 1.0), a_mid = middle.amplitude(0, 1.0), a_low = upper.amplitude(0, 1.0);
+  std::printf("  Omega = 1.15: A1 high %.5e (stable %d) middle %.5e (stable %d) low %.5e (stable %d)\n", a_high,
+              hb.hill_stability(lower).stable, a_mid, hb.hill_stability(middle).stable, a_low,
+              hb.hill_stability(upper).stable);
+  ASSERT_GT(a_high, 1.2 * a_mid);
+  ASSERT_GT(a_mid, 1.2 * a_low);
+  EXPECT_TRUE(hb.hill_stability(lower).stable);
+  EXPECT_FALSE(hb.hill_stability(middle).stable);
+  EXPECT_TRUE(hb.hill_stability(upper).stable);
+
+  // Time integration started from each HB state: the stable ones stay, the unstable one drifts to
+  // one of the stable ones.
+  TimeIntegration ti{s, omega};
+  ti.steps_per_period = 2000;
+  auto settle = [&](const Solution& sol) {
+    VectorX q, v;
+    initial_state(sol, q, v);
+    double t = 0.0;
+    ti.run(q, v, t, 300);  // e^{-zeta w t} ~ 1e-8
+    return std::abs(ti.harmonics(q, v, t, 0, 1)[1]);
+  };
+  const double ti_high = settle(lower), ti_mid = settle(middle), ti_low = settle(upper);
+  std::printf("  time integration from them, after 300 periods: A1 %.5e, %.5e, %.5e\n", ti_high, ti_mid, ti_low);
+  EXPECT_NEAR(ti_high, a_high, 1e-3 * a_high);
+  EXPECT_NEAR(ti_low, a_low, 1e-3 * a_low);
+  EXPECT_GT(std::abs(ti_mid - a_mid), 0.2 * a_mid);
+  EXPECT_LT(std::min(std::abs(ti_mid - a_high) / a_high, std::abs(ti_mid - a_low) / a_low), 1e-3);
 }
 
 }  // namespace
