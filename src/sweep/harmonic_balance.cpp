@@ -148,18 +148,20 @@ struct HarmonicBalance::Impl {
   }
 
   /// Contact law at the samples: forces (c x N) and, optionally, dlaw/dg.
-  MatrixX law(const MatrixX& gaps, MatrixX* slope) const {
+  MatrixX law(const MatrixX& gaps, MatrixX* slope, double factor = 1.0) const {
     MatrixX p(c, N);
     if (slope) slope->setZero(c, N);
     for (Index i = 0; i < c; ++i)
       for (int j = 0; j < N; ++j) {
-        p(i, j) = contact::penalty_pressure(gaps(i, j), stiffness[i]);
-        if (slope && gaps(i, j) < 0.0) (*slope)(i, j) = -stiffness[i];
+        p(i, j) = contact::penalty_pressure(gaps(i, j), factor * stiffness[i]);
+        if (slope && gaps(i, j) < 0.0) (*slope)(i, j) = -factor * stiffness[i];
       }
     return p;
   }
 
-  VectorX forces(const VectorX& gaps) const { return to_harmonics(law(to_time(gaps), nullptr)); }
+  VectorX forces(const VectorX& gaps, double factor = 1.0) const {
+    return to_harmonics(law(to_time(gaps), nullptr, factor));
+  }
 
   /// Linear part: g0 delta_k0 + H P + E F, in [m].
   VectorX apply(const std::vector<HarmonicReceptance>& rec, const VectorX& p, bool derivative) const {
@@ -211,9 +213,9 @@ struct HarmonicBalance::Impl {
   }
 
   /// Scaled Jacobian I - H dP/dG.
-  MatrixX jacobian(const std::vector<HarmonicReceptance>& rec, const VectorX& gaps) const {
+  MatrixX jacobian(const std::vector<HarmonicReceptance>& rec, const VectorX& gaps, double factor = 1.0) const {
     MatrixX slope;
-    law(to_time(gaps), &slope);
+    law(to_time(gaps), &slope, factor);
     const Index n = n_unknowns();
     MatrixX jac = MatrixX::Identity(n, n);
     const int nc = 2 * H + 1;
@@ -237,8 +239,32 @@ struct HarmonicBalance::Impl {
     return jac;
   }
 
-  VectorX residual(const std::vector<HarmonicReceptance>& rec, const VectorX& gaps) const {
-    return (gaps - apply(rec, forces(gaps), false)) / scale;
+  VectorX residual(const std::vector<HarmonicReceptance>& rec, const VectorX& gaps, double factor = 1.0) const {
+    return (gaps - apply(rec, forces(gaps, factor), false)) / scale;
+  }
+
+  /// Damped Newton at fixed Omega with the penalty scaled by `factor`; returns the iterations taken.
+  int newton(const std::vector<HarmonicReceptance>& rec, VectorX& gaps, double factor, double& norm) const {
+    VectorX r = residual(rec, gaps, factor);
+    norm = r.lpNorm<Eigen::Infinity>();
+    int it = 0;
+    while (norm > options.tolerance && it < options.max_iterations) {
+      ++it;
+      const VectorX step = jacobian(rec, gaps, factor).partialPivLu().solve(-r) * scale;
+      // backtracking on the 2-norm of the residual (piecewise-linear contact makes plain Newton cycle)
+      double alpha = 1.0;
+      VectorX trial = gaps + step;
+      VectorX r_trial = residual(rec, trial, factor);
+      while (r_trial.norm() > r.norm() && alpha > 1.0 / 64.0) {
+        alpha *= 0.5;
+        trial = gaps + alpha * step;
+        r_trial = residual(rec, trial, factor);
+      }
+      gaps = trial;
+      r = r_trial;
+      norm = r.lpNorm<Eigen::Infinity>();
+    }
+    return it;
   }
 };
 
@@ -318,25 +344,14 @@ Solution HarmonicBalance::solve(double omega, const VectorX& guess) const {
   Solution sol;
   sol.omega = omega;
   sol.subharmonic = d.nu;
-  sol.gaps = guess.size() == d.n_unknowns() ? guess : linear_gaps(omega);
-  VectorX r = d.residual(rec, sol.gaps);
-  double norm = r.lpNorm<Eigen::Infinity>();
-  int it = 0;
-  while (norm > d.options.tolerance && it < d.options.max_iterations) {
-    ++it;
-    const VectorX step = d.jacobian(rec, sol.gaps).partialPivLu().solve(-r) * d.scale;
-    // backtracking on the 2-norm of the residual
-    double alpha = 1.0;
-    VectorX trial = sol.gaps + step;
-    VectorX r_trial = d.residual(rec, trial);
-    while (r_trial.norm() > r.norm() && alpha > 1.0 / 64.0) {
-      alpha *= 0.5;
-      trial = sol.gaps + alpha * step;
-      r_trial = d.residual(rec, trial);
-    }
-    sol.gaps = trial;
-    r = r_trial;
-    norm = r.lpNorm<Eigen::Infinity>();
+  const bool given = guess.size() == d.n_unknowns();
+  sol.gaps = given ? guess : linear_gaps(omega);
+  double norm = 0.0;
+  int it = d.newton(rec, sol.gaps, 1.0, norm);
+  if (norm > d.options.tolerance && !given) {
+    // fallback from the linear guess: homotopy on the penalty, eps_N / 64 .. eps_N
+    sol.gaps = linear_gaps(omega);
+    for (double factor = 1.0 / 64.0; factor <= 1.0; factor *= 2.0) it += d.newton(rec, sol.gaps, factor, norm);
   }
   sol.iterations = it;
   sol.residual = norm;
@@ -452,6 +467,7 @@ Stability HarmonicBalance::hill_stability(const Solution& sol, double tolerance)
   struct Candidate {
     Complex lambda;
     double centroid;
+    Index index;
   };
   std::vector<Candidate> candidates;
   for (Index e = 0; e < 2 * size; ++e) {
@@ -462,22 +478,27 @@ Stability HarmonicBalance::hill_stability(const Solution& sol, double tolerance)
       wsum += w;
       ksum += k * w;
     }
-    candidates.push_back({eig.eigenvalues()[e], wsum > 0.0 ? std::abs(ksum / wsum) : 1e300});
+    candidates.push_back({eig.eigenvalues()[e], wsum > 0.0 ? std::abs(ksum / wsum) : 1e300, e});
   }
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) { return a.centroid < b.centroid; });
   Stability st;
   std::vector<Complex> chosen;
-  const double family_tol = 1e-6 * std::max(w0, 1.0);
+  std::vector<Index> chosen_index;
+  // family members differ by i k w0; truncation makes their real parts differ slightly
+  const double family_tol = 1e-3 * w0;
   for (const Candidate& cand : candidates) {
     if (static_cast<Index>(chosen.size()) == 2 * m) break;
     bool same_family = false;
     for (const Complex& other : chosen) {
       const double shift = (cand.lambda.imag() - other.imag()) / w0;
-      if (std::abs(cand.lambda.real() - other.real()) < family_tol && std::abs(shift - std::round(shift)) < 1e-6 &&
+      if (std::abs(cand.lambda.real() - other.real()) < family_tol && std::abs(shift - std::round(shift)) < 1e-3 &&
           std::lround(shift) != 0)
         same_family = true;
     }
-    if (!same_family) chosen.push_back(cand.lambda);
+    if (!same_family) {
+      chosen.push_back(cand.lambda);
+      chosen_index.push_back(cand.index);
+    }
   }
   const Index count = static_cast<Index>(chosen.size());
   st.exponents.resize(count);
@@ -499,7 +520,54 @@ Stability HarmonicBalance::hill_stability(const Solution& sol, double tolerance)
     }
   }
   st.stable = st.max_real_part <= tolerance;
+  if (count > 0) {
+    Index best = 0;
+    for (Index e = 1; e < count; ++e)
+      if (chosen[e].real() > chosen[best].real()) best = e;
+    st.critical_exponent = chosen[best];
+    const auto v = eig.eigenvectors().col(chosen_index[best]).head(size);
+    st.critical_mode.resize(m, 2 * H + 1);
+    for (int k = -H; k <= H; ++k) st.critical_mode.col(k + H) = v.segment((k + H) * m, m);
+  }
   return st;
+}
+
+VectorX period_doubled_guess(const reduced::ReducedSystem& system, const Solution& period_one,
+                             const Stability& stability, int harmonics, double amplitude) {
+  if (period_one.subharmonic != 1)
+    throw InputError("period_doubled_guess: needs a period-one solution (nu = 1), got nu = " +
+                     std::to_string(period_one.subharmonic));
+  const Index c = system.n_rows();
+  const int h1 = static_cast<int>(period_one.gaps.size() / c - 1) / 2;
+  VectorX guess = VectorX::Zero(c * (2 * harmonics + 1));
+  auto put = [&](VectorX& x, int k, Index i, Complex value) {
+    if (k == 0) {
+      x[i] += value.real();
+    } else {
+      x[(2 * k - 1) * c + i] += value.real();
+      x[(2 * k) * c + i] -= value.imag();
+    }
+  };
+  // even harmonics: the period-one response
+  for (int k = 0; k <= h1 && 2 * k <= harmonics; ++k)
+    for (Index i = 0; i < c; ++i) {
+      const Complex value = k == 0 ? Complex(period_one.gaps[i]) : Complex(period_one.gaps[(2 * k - 1) * c + i], -period_one.gaps[(2 * k) * c + i]);
+      put(guess, 2 * k, i, value);
+    }
+  // odd harmonics: the critical eigenvector, harmonic k of Omega at Im(lambda) + k Omega = j Omega / 2
+  if (stability.critical_mode.size() == 0) return guess;
+  const int hill_h = static_cast<int>(stability.critical_mode.cols() - 1) / 2;
+  const double shift = 2.0 * stability.critical_exponent.imag() / period_one.omega;
+  VectorX odd = VectorX::Zero(guess.size());
+  for (int k = -hill_h; k <= hill_h; ++k) {
+    const long j = std::lround(2.0 * k + shift);
+    if (j == 0 || std::abs(j) > harmonics) continue;
+    const ComplexVectorX gaps = system.pair_modes.cast<Complex>() * stability.critical_mode.col(k + hill_h);
+    for (Index i = 0; i < c; ++i) put(odd, static_cast<int>(std::abs(j)), i, j > 0 ? gaps[i] : std::conj(gaps[i]));
+  }
+  const double largest = odd.cwiseAbs().maxCoeff();
+  if (largest > 0.0) guess += odd * (amplitude / largest);
+  return guess;
 }
 
 }  // namespace crackle::sweep

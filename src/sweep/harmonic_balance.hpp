@@ -21,6 +21,7 @@
 ///
 /// **Contact law (frictionless).** Normal rows only: \f$p = \varepsilon_N A \max(0, -g)\f$ (MODEL.md
 /// eq. 25d) per sample. Friction (rows per pair 3) is not implemented yet: the constructor throws.
+#include <complex>
 #include <functional>
 #include <memory>
 #include <vector>
@@ -77,6 +78,10 @@ struct Stability {
   int unstable_positive = 0;
   int unstable_negative = 0;
   int unstable_complex = 0;
+  /// The exponent of largest real part and its Hill eigenvector: modal harmonics s_k of the base
+  /// frequency Omega/nu, m x (2H+1), column k + H for k = -H..H (delta q = Re e^{lambda t} sum s_k e^{ik Omega t/nu}).
+  std::complex<double> critical_exponent;
+  ComplexMatrixX critical_mode;
 };
 
 /// Harmonic balance of a reduced system. Borrows the system: it must outlive this object.
@@ -121,6 +126,13 @@ class HarmonicBalance {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// A first guess for the nu = 2 branch born at a period doubling of `period_one` (nu = 1): its gaps
+/// on the even harmonics of Omega/2 and the critical Hill eigenvector of `stability`, mapped to the
+/// gaps through B Phi, on the odd ones, scaled so that its largest gap harmonic is `amplitude` [m].
+/// `harmonics` is H of the nu = 2 solver (2H of the nu = 1 one keeps the same resolution).
+VectorX period_doubled_guess(const reduced::ReducedSystem& system, const Solution& period_one,
+                             const Stability& stability, int harmonics, double amplitude);
 
 /// Options of the pseudo-arclength continuation.
 struct ContinuationOptions {

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "core/errors.hpp"
 #include "sweep/harmonic_balance.hpp"
 
 namespace crackle::sweep {
@@ -293,6 +294,85 @@ TEST(Continuation, FoldOfAHardeningClearanceOscillator) {
   EXPECT_NEAR(ti_low, a_low, 1e-3 * a_low);
   EXPECT_GT(std::abs(ti_mid - a_mid), 0.2 * a_mid);
   EXPECT_LT(std::min(std::abs(ti_mid - a_high) / a_high, std::abs(ti_mid - a_low) / a_low), 1e-3);
+}
+
+TEST(Continuation, PeriodDoublingOfABilinearOscillator) {
+  // Closed at rest (g0 = 0), open w = 1, closed w = 2: bilinear frequency 4/3. Driven near twice
+  // that, the period-one response loses stability through -1 and a period-two response (A1/2)
+  // takes over (the time integration below settles on it).
+  const auto s = one_dof(1.0, 0.01, 1.0, 0.0, 1e-6, 0.0, 3.0, 0.0);
+  HarmonicBalanceOptions opt1;
+  opt1.harmonics = 10;
+  HarmonicBalance hb1(s, opt1);
+  ContinuationOptions copt;
+  copt.initial_step = 0.02;
+  copt.max_step = 0.02;
+  const auto branch = continue_branch(hb1, 2.0, 2.6, copt);
+  std::size_t doubling = branch.size();
+  int n_doubling = 0, n_fold = 0;
+  for (std::size_t i = 0; i < branch.size(); ++i) {
+    n_fold += branch[i].fold;
+    if (branch[i].period_doubling) {
+      ++n_doubling;
+      doubling = i;
+    }
+  }
+  ASSERT_EQ(n_doubling, 1);
+  EXPECT_EQ(n_fold, 0);
+  const double omega_pd = branch[doubling].solution.omega;
+  std::printf("  period doubling flagged at Omega = %.4f (previous point %.4f); critical lambda = %.4f%+.4fi\n", omega_pd,
+              branch[doubling - 1].solution.omega, branch[doubling].stability.critical_exponent.real(),
+              branch[doubling].stability.critical_exponent.imag());
+  EXPECT_GT(omega_pd, 2.2);
+  EXPECT_LT(omega_pd, 2.35);
+  for (std::size_t i = 0; i < branch.size(); ++i) {
+    EXPECT_EQ(branch[i].stability.stable, i < doubling);
+    EXPECT_EQ(branch[i].stability.unstable_negative, i < doubling ? 0 : 1);
+  }
+  // the critical multiplier is real negative: Im lambda = Omega/2 (mod Omega)
+  const double shift = branch[doubling].stability.critical_exponent.imag() / omega_pd;
+  EXPECT_NEAR(std::abs(shift - std::floor(shift)), 0.5, 1e-4);
+
+  // nu = 2 at Omega = 2.5, from the period-one point and the critical eigenvector
+  const double omega = 2.5;
+  const Solution one = hb1.solve(omega);
+  const Stability one_stability = hb1.hill_stability(one);
+  HarmonicBalanceOptions opt2;
+  opt2.harmonics = 40;
+  opt2.subharmonic = 2;
+  HarmonicBalance hb2(s, opt2);
+  Solution two;
+  bool found = false;
+  for (double amplitude : {0.5, 1.0, 2.0, 4.0}) {
+    const VectorX guess = period_doubled_guess(s, one, one_stability, opt2.harmonics, amplitude * one.amplitude(0, 1.0));
+    try {
+      two = hb2.solve(omega, guess);
+    } catch (const SolverError&) {
+      continue;
+    }
+    if (two.amplitude(0, 0.5) > 0.01 * two.amplitude(0, 1.0)) {
+      found = true;
+      break;
+    }
+  }
+  ASSERT_TRUE(found);
+  const Stability two_stability = hb2.hill_stability(two);
+
+  TimeIntegration ti{s, omega};
+  ti.nu = 2;
+  ti.steps_per_period = 8000;
+  VectorX q, v;
+  initial_state(one, q, v);
+  q[0] *= 1.01;  // the unstable period-one state, perturbed
+  double t = 0.0;
+  ti.run(q, v, t, 400);
+  const auto ref = ti.harmonics(q, v, t, 0, 2);
+  std::printf("  Omega = %.2f: nu = 2 HB A1/2 %.5e A1 %.5e (stable %d) | time integration A1/2 %.5e A1 %.5e\n", omega,
+              two.amplitude(0, 0.5), two.amplitude(0, 1.0), two_stability.stable, std::abs(ref[1]), std::abs(ref[2]));
+  EXPECT_NEAR(two.amplitude(0, 0.5), std::abs(ref[1]), 0.05 * std::abs(ref[1]));
+  EXPECT_NEAR(two.amplitude(0, 1.0), std::abs(ref[2]), 0.05 * std::abs(ref[2]));
+  EXPECT_TRUE(two_stability.stable);
+  EXPECT_FALSE(one_stability.stable);
 }
 
 }  // namespace
