@@ -270,9 +270,36 @@ struct HarmonicBalance::Impl {
 
 // ---------------------------------------------------------------------------------------------
 
-double Solution::amplitude(Index row, double order) const { return std::abs(outputs(row, std::lround(order * subharmonic))); }
+namespace {
+/// Column of `outputs` holding `order` of Omega, or -1 when the solution has no such order
+/// (order 1/2 of a nu = 1 solution, beyond H).
+Index order_column(const Solution& sol, double order) {
+  const double k = order * sol.subharmonic;
+  const long column = std::lround(k);
+  if (std::abs(k - column) > 1e-9 || column < 0 || column >= sol.outputs.cols()) return -1;
+  return static_cast<Index>(column);
+}
+}  // namespace
 
-double Solution::phase(Index row, double order) const { return std::arg(outputs(row, std::lround(order * subharmonic))); }
+double Solution::amplitude(Index row, double order) const {
+  const Index column = order_column(*this, order);
+  return column < 0 ? 0.0 : std::abs(outputs(row, column));
+}
+
+double Solution::phase(Index row, double order) const {
+  const Index column = order_column(*this, order);
+  return column < 0 ? 0.0 : std::arg(outputs(row, column));
+}
+
+OrderRatios Solution::ratios(Index row) const {
+  OrderRatios r;
+  const double a1 = amplitude(row, 1.0);
+  if (a1 == 0.0) return r;
+  r.second = amplitude(row, 2.0) / a1;
+  r.third = amplitude(row, 3.0) / a1;
+  r.half = amplitude(row, 0.5) / a1;
+  return r;
+}
 
 HarmonicBalance::HarmonicBalance(const reduced::ReducedSystem& system, const HarmonicBalanceOptions& options)
     : impl_(std::make_unique<Impl>(system, options)) {

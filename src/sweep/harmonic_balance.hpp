@@ -46,6 +46,13 @@ struct HarmonicBalanceOptions {
   double top_threshold = 1e-3;  ///< flag a point whose top-harmonic share of the gap response exceeds this
 };
 
+/// Amplitude ratios of one output row to its first order A1 (0 where A1 = 0).
+struct OrderRatios {
+  double second = 0.0;  ///< A2/A1
+  double third = 0.0;   ///< A3/A1
+  double half = 0.0;    ///< A1/2 / A1 (0 unless nu = 2)
+};
+
 /// One periodic solution.
 struct Solution {
   double omega = 0.0;          ///< Omega, the load's angular frequency [rad/s]
@@ -61,10 +68,13 @@ struct Solution {
   bool harmonics_flagged = false;   ///< top_harmonic_share > top_threshold: raise H
   double rigid_imbalance = 0.0;     ///< max over rigid modes of |phi_r^T (f F_0 + B^T P_0)| [N], see file comment
 
-  /// Amplitude of output `row` at order `order` of Omega (order 1 = the load frequency; 0.5 needs nu = 2).
+  /// Amplitude of output `row` at order `order` of Omega (order 1 = the load frequency; 0.5 needs
+  /// nu = 2); 0 for an order the solution does not hold (1/2 with nu = 1, above H/nu).
   double amplitude(Index row, double order) const;
-  /// Phase [rad] of output `row` at `order`, relative to the load cos(Omega t).
+  /// Phase [rad] of output `row` at `order`, relative to the load cos(Omega t); 0 where amplitude() is.
   double phase(Index row, double order) const;
+  /// A2/A1, A3/A1, A1/2/A1 of output `row`.
+  OrderRatios ratios(Index row) const;
 };
 
 /// Stability of a periodic solution by Hill's method.

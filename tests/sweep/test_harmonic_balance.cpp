@@ -214,6 +214,77 @@ TEST(HarmonicBalance, BilinearOscillatorMatchesTimeIntegration) {
 }
 
 
+/// m modes, c pairs with random coupling, half of them closed at rest (g0 < 0).
+reduced::ReducedSystem random_system(Index m, Index c, unsigned seed) {
+  std::srand(seed);
+  reduced::ReducedSystem s;
+  s.omega = VectorX::LinSpaced(m, 1.0, 1.0 + 0.7 * (m - 1));
+  s.rayleigh_alpha = 0.02;
+  s.rayleigh_beta = 0.002;
+  s.pair_area = VectorX::Constant(c, 0.5);
+  s.initial_gap = 1e-7 * VectorX::Random(c);
+  s.normal_penalty = 4.0;
+  s.pair_modes = MatrixX::Random(c, m);
+  const MatrixX a = MatrixX::Random(c, c);
+  s.residual = 0.01 * (a * a.transpose() / c + MatrixX::Identity(c, c));
+  s.load_modal = 1e-6 * VectorX::Random(m);
+  s.load_residual = 1e-8 * VectorX::Random(c);
+  s.output_modes = MatrixX::Random(2, m);
+  s.output_residual_pairs = 0.01 * MatrixX::Random(2, c);
+  s.output_residual_load = 1e-8 * VectorX::Random(2);
+  return s;
+}
+
+TEST(HarmonicBalance, CoupledPairsJacobianAndCost) {
+  {
+    const auto s = random_system(4, 5, 7);
+    HarmonicBalanceOptions opt;
+    opt.harmonics = 3;
+    HarmonicBalance hb(s, opt);
+    const double omega = 1.7;
+    const Solution sol = hb.solve(omega);
+    int closed = 0;
+    for (Index i = 0; i < 5; ++i) closed += sol.forces[i] > 0.0;
+    EXPECT_GT(closed, 0);
+    const MatrixX jac = hb.jacobian(omega, sol.gaps);
+    const double h = 1e-9 * hb.gap_scale();
+    double worst = 0.0;
+    for (Index j = 0; j < sol.gaps.size(); ++j) {
+      VectorX gp = sol.gaps, gm = sol.gaps;
+      gp[j] += h;
+      gm[j] -= h;
+      const VectorX fd = (hb.residual(omega, gp) - hb.residual(omega, gm)) / (2 * h) * hb.gap_scale();
+      worst = std::max(worst, (fd - jac.col(j)).cwiseAbs().maxCoeff());
+    }
+    EXPECT_LT(worst, 1e-4);
+    // outputs: Y_1 = C Phi Q_1 + C G_res B^T P_1 + C G_res f
+    const Eigen::VectorXcd p1 = sol.forces.segment(5, 5).cast<Complex>() - Complex(0, 1) * sol.forces.segment(10, 5).cast<Complex>();
+    const Eigen::VectorXcd y1 = s.output_modes.cast<Complex>() * sol.modal.col(1) + s.output_residual_pairs.cast<Complex>() * p1 +
+                                s.output_residual_load.cast<Complex>();
+    EXPECT_LT((y1 - sol.outputs.col(1)).cwiseAbs().maxCoeff(), 1e-12 * y1.cwiseAbs().maxCoeff());
+  }
+  std::printf("  cost of one Newton iteration (residual + Jacobian + LU), m = 10 modes, N = 4096\n");
+  for (Index c : {1, 8, 32}) {
+    for (int harmonics : {5, 10, 20}) {
+      const auto s = random_system(10, c, 11);
+      HarmonicBalanceOptions opt;
+      opt.harmonics = harmonics;
+      HarmonicBalance hb(s, opt);
+      VectorX g = hb.linear_gaps(2.0);
+      const auto start = std::chrono::steady_clock::now();
+      const VectorX r = hb.residual(2.0, g);
+      const MatrixX jac = hb.jacobian(2.0, g);
+      const auto mid = std::chrono::steady_clock::now();
+      const VectorX step = jac.partialPivLu().solve(r);
+      const auto end = std::chrono::steady_clock::now();
+      EXPECT_TRUE(step.allFinite());
+      std::printf("    pairs %3d H %2d unknowns %5d: residual+Jacobian %8.2f ms, LU %8.2f ms\n", int(c), harmonics,
+                  int(hb.n_unknowns()), std::chrono::duration<double, std::milli>(mid - start).count(),
+                  std::chrono::duration<double, std::milli>(end - mid).count());
+    }
+  }
+}
+
 TEST(Continuation, FoldOfAHardeningClearanceOscillator) {
   // Open at rest with a clearance g0 = 5 um, light damping (Q = 50): once |q| > g0 the contact
   // stiffens the oscillator (w = 1 open, 2 closed), the resonance bends to the right and the branch
@@ -373,6 +444,8 @@ TEST(Continuation, PeriodDoublingOfABilinearOscillator) {
   EXPECT_NEAR(two.amplitude(0, 1.0), std::abs(ref[2]), 0.05 * std::abs(ref[2]));
   EXPECT_TRUE(two_stability.stable);
   EXPECT_FALSE(one_stability.stable);
+  EXPECT_EQ(one.amplitude(0, 0.5), 0.0);  // a period-one solution has no order 1/2
+  EXPECT_NEAR(two.ratios(0).half, std::abs(ref[1]) / std::abs(ref[2]), 0.1 * std::abs(ref[1]) / std::abs(ref[2]));
 }
 
 }  // namespace
