@@ -160,6 +160,32 @@ TEST(HarmonicBalance, LinearEqualsReceptanceResponse) {
   }
 }
 
+TEST(HarmonicBalance, RigidModeHasNoStaticReceptance) {
+  // A free body: mode 0 rigid (omega 0), mode 1 elastic. At k >= 1 the rigid mode's receptance is
+  // -1/omega^2; at k = 0 it is left out and the mean load it would see is reported.
+  reduced::ReducedSystem s = one_dof(1.5, 0.02, 0.8, 0.05, 1e-6, 0.0, 2.0, 1.0);
+  s.omega = Eigen::Vector2d(0.0, 1.5);
+  s.pair_modes = MatrixX(1, 2);
+  s.pair_modes << 0.3, 0.8;
+  s.load_modal = Eigen::Vector2d(2e-7, 1e-6);
+  s.output_modes = MatrixX::Identity(2, 2);
+  s.output_residual_pairs = MatrixX::Zero(2, 1);
+  s.output_residual_load = VectorX::Zero(2);
+  HarmonicBalanceOptions opt;
+  opt.harmonics = 4;
+  {
+    HarmonicBalance hb(s, opt);  // g0 = 1 m: open
+    const Solution sol = hb.solve(1.1);
+    EXPECT_NEAR(std::abs(sol.outputs(0, 1) - Complex(-2e-7 / (1.1 * 1.1))), 0.0, 1e-20);
+    EXPECT_EQ(sol.rigid_imbalance, 0.0);
+  }
+  s.initial_gap[0] = -1e-7;  // preloaded: a mean contact force the rigid mode would carry
+  HarmonicBalance hb(s, opt);
+  const Solution sol = hb.solve(1.1);
+  EXPECT_GT(sol.forces[0], 0.0);
+  EXPECT_NEAR(sol.rigid_imbalance, 0.3 * sol.forces[0], 1e-12 * sol.forces[0]);
+}
+
 TEST(HarmonicBalance, JacobianMatchesFiniteDifferences) {
   const auto s = one_dof(1.0, 0.05, 1.0, 0.1, 1e-6, 5e-8, 3.0, 0.0);
   HarmonicBalanceOptions opt;
