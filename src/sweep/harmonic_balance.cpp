@@ -47,7 +47,10 @@ struct HarmonicBalance::Impl {
   int N = 0;
   int nu = 1;
   double scale = 1.0;
-  VectorX stiffness;  ///< eps_N A per row
+  VectorX stiffness;  ///< eps_N A per row (0 on tangential rows)
+  VectorX row_gap;    ///< g0 per row (0 on tangential rows)
+  int rows_per_pair = 1;
+  MatrixX basis;      ///< N x (2H+1): 1, cos k tau_j, sin k tau_j (friction tangents)
   fftw_plan forward = nullptr;   ///< r2c, N -> N/2+1
   fftw_plan backward = nullptr;  ///< c2r
 
@@ -149,6 +152,11 @@ struct HarmonicBalance::Impl {
 
   /// Contact law at the samples: forces (c x N) and, optionally, dlaw/dg.
   MatrixX law(const MatrixX& gaps, MatrixX* slope, double factor = 1.0) const {
+    if (rows_per_pair == 3) {
+      MatrixX p(c, N);
+      for (Index pair = 0; pair < c / 3; ++pair) p.middleRows(3 * pair, 3) = friction_law(gaps, pair, nullptr, factor);
+      return p;
+    }
     MatrixX p(c, N);
     if (slope) slope->setZero(c, N);
     for (Index i = 0; i < c; ++i)
@@ -157,6 +165,123 @@ struct HarmonicBalance::Impl {
         if (slope && gaps(i, j) < 0.0) (*slope)(i, j) = -factor * stiffness[i];
       }
     return p;
+  }
+
+
+  /// Normal penalty and Coulomb return mapping of one pair (rows 3 pair .. 3 pair + 2) marched over
+  /// two periods from a zero traction; the second period is kept (3 x N). With `tangent`, also the
+  /// derivatives of the kept forces with respect to the pair's gap harmonics, propagated through the
+  /// march: (*tangent)[row] is N x 3(2H+1), direction index = component * 3 + local row.
+  MatrixX friction_law(const MatrixX& gaps, Index pair, std::vector<MatrixX>* tangent, double factor) const {
+    const Index row = 3 * pair;
+    const double area = system.pair_area[pair];
+    const double eps_n = factor * system.normal_penalty;
+    const double eps_t = factor * system.tangential_penalty;
+    const double mu = system.friction_coefficient;
+    const int nc = 2 * H + 1;
+    const int nd = 3 * nc;
+    MatrixX p(3, N);
+    if (tangent) tangent->assign(3, MatrixX::Zero(N, nd));
+    Vec3 traction = Vec3::Zero();
+    MatrixX d_traction = MatrixX::Zero(2, tangent ? nd : 0);
+    const Vec3 normal(0.0, 0.0, 1.0);
+    for (int step = 0; step < 2 * N; ++step) {
+      const int j = step % N;
+      const int previous = (j + N - 1) % N;
+      const double gap_n = gaps(row, j);
+      const double pressure = contact::penalty_pressure(gap_n, eps_n);
+      Vec3 increment = Vec3::Zero();
+      if (step > 0) increment << gaps(row + 1, j) - gaps(row + 1, previous), gaps(row + 2, j) - gaps(row + 2, previous), 0.0;
+      const contact::CoulombUpdate update =
+          contact::coulomb_return_mapping(traction, increment, normal, eps_t, mu, pressure);
+      if (tangent) {
+        // d trial = d t_old - eps_T d(increment); directions of the tangential rows' components
+        MatrixX d_trial = d_traction;
+        if (step > 0)
+          for (int hc = 0; hc < nc; ++hc) {
+            const double db = basis(j, hc) - basis(previous, hc);
+            d_trial(0, hc * 3 + 1) -= eps_t * db;
+            d_trial(1, hc * 3 + 2) -= eps_t * db;
+          }
+        if (!update.slipping) {
+          d_traction = d_trial;
+        } else {
+          const Eigen::Vector2d trial(traction[0] - eps_t * increment[0], traction[1] - eps_t * increment[1]);
+          const double norm = trial.norm();
+          if (norm > 0.0) {
+            const Eigen::Vector2d dir = trial / norm;
+            const double limit = mu * pressure;
+            const Eigen::Matrix2d projector = (Eigen::Matrix2d::Identity() - dir * dir.transpose()) * (limit / norm);
+            d_traction = projector * d_trial;
+            if (gap_n < 0.0)
+              for (int hc = 0; hc < nc; ++hc) d_traction.col(hc * 3) += dir * (mu * -eps_n * basis(j, hc));
+          } else {
+            d_traction.setZero();
+          }
+        }
+      }
+      traction = update.traction;
+      if (step >= N) {
+        p(0, j) = area * pressure;
+        p(1, j) = area * traction[0];
+        p(2, j) = area * traction[1];
+        if (tangent) {
+          if (gap_n < 0.0)
+            for (int hc = 0; hc < nc; ++hc) (*tangent)[0](j, hc * 3) = -area * eps_n * basis(j, hc);
+          (*tangent)[1].row(j) = area * d_traction.row(0);
+          (*tangent)[2].row(j) = area * d_traction.row(1);
+        }
+      }
+    }
+    return p;
+  }
+
+  /// dP/dG block of one friction pair: (3(2H+1))^2, index component * 3 + local row on both sides.
+  MatrixX friction_derivative(const MatrixX& gaps, Index pair, double factor) const {
+    std::vector<MatrixX> tangent;
+    friction_law(gaps, pair, &tangent, factor);
+    const int nc = 2 * H + 1;
+    const int nd = 3 * nc;
+    MatrixX block = MatrixX::Zero(nd, nd);
+    std::vector<double> signal(N);
+    std::vector<fftw_complex> spectrum(N / 2 + 1);
+    for (int local = 0; local < 3; ++local)
+      for (int col = 0; col < nd; ++col) {
+        if (tangent[local].col(col).cwiseAbs().maxCoeff() == 0.0) continue;
+        for (int j = 0; j < N; ++j) signal[j] = tangent[local](j, col);
+        fftw_execute_dft_r2c(forward, signal.data(), spectrum.data());
+        block(local, col) = spectrum[0][0] / N;
+        for (int k = 1; k <= H; ++k) {
+          block((2 * k - 1) * 3 + local, col) = 2.0 * spectrum[k][0] / N;
+          block((2 * k) * 3 + local, col) = -2.0 * spectrum[k][1] / N;
+        }
+      }
+    return block;
+  }
+
+  /// Subtracts H * dP from the columns of the rows `first .. first + r - 1` (one pair), given the
+  /// pair's dP block indexed component * r + local row.
+  void subtract_pair(MatrixX& jac, const std::vector<HarmonicReceptance>& rec, Index first, int r, const MatrixX& block) const {
+    const int nc = 2 * H + 1;
+    for (int col_hc = 0; col_hc < nc; ++col_hc)
+      for (int col_local = 0; col_local < r; ++col_local) {
+        const int bcol = col_hc * r + col_local;
+        if (block.col(bcol).cwiseAbs().maxCoeff() == 0.0) continue;
+        auto column = jac.col(col_hc * c + first + col_local);
+        for (int local = 0; local < r; ++local) {
+          const Index i = first + local;
+          column.segment(0, c) -= rec[0].pairs.col(i).real() * block(local, bcol);
+          for (int k = 1; k <= H; ++k) {
+            const double ja = block((2 * k - 1) * r + local, bcol);
+            const double jb = block((2 * k) * r + local, bcol);
+            if (ja == 0.0 && jb == 0.0) continue;
+            const auto re = rec[k].pairs.col(i).real();
+            const auto im = rec[k].pairs.col(i).imag();
+            column.segment((2 * k - 1) * c, c) -= re * ja + im * jb;
+            column.segment((2 * k) * c, c) -= -im * ja + re * jb;
+          }
+        }
+      }
   }
 
   VectorX forces(const VectorX& gaps, double factor = 1.0) const {
@@ -175,7 +300,7 @@ struct HarmonicBalance::Impl {
       for (Index i = 0; i < c; ++i) set_amplitude(g, k, i, gk[i]);
     }
     if (!derivative)
-      for (Index i = 0; i < c; ++i) g[i] += system.initial_gap[i];
+      g.head(c) += row_gap;
     return g;
   }
 
@@ -214,27 +339,19 @@ struct HarmonicBalance::Impl {
 
   /// Scaled Jacobian I - H dP/dG.
   MatrixX jacobian(const std::vector<HarmonicReceptance>& rec, const VectorX& gaps, double factor = 1.0) const {
-    MatrixX slope;
-    law(to_time(gaps), &slope, factor);
     const Index n = n_unknowns();
     MatrixX jac = MatrixX::Identity(n, n);
-    const int nc = 2 * H + 1;
+    const MatrixX samples = to_time(gaps);
+    if (rows_per_pair == 3) {
+      for (Index pair = 0; pair < c / 3; ++pair)
+        subtract_pair(jac, rec, 3 * pair, 3, friction_derivative(samples, pair, factor));
+      return jac;
+    }
+    MatrixX slope;
+    law(samples, &slope, factor);
     for (Index j = 0; j < c; ++j) {
       if (slope.row(j).cwiseAbs().maxCoeff() == 0.0) continue;
-      const MatrixX block = force_derivative(slope, j);
-      for (int col = 0; col < nc; ++col) {
-        auto column = jac.col(col * c + j);
-        // k = 0 rows
-        column.segment(0, c) -= rec[0].pairs.col(j).real() * block(0, col);
-        for (int k = 1; k <= H; ++k) {
-          const VectorX re = rec[k].pairs.col(j).real();
-          const VectorX im = rec[k].pairs.col(j).imag();
-          const double ja = block(2 * k - 1, col);
-          const double jb = block(2 * k, col);
-          column.segment((2 * k - 1) * c, c) -= re * ja + im * jb;
-          column.segment((2 * k) * c, c) -= -im * ja + re * jb;
-        }
-      }
+      subtract_pair(jac, rec, j, 1, force_derivative(slope, j));
     }
     return jac;
   }
@@ -304,8 +421,6 @@ OrderRatios Solution::ratios(Index row) const {
 HarmonicBalance::HarmonicBalance(const reduced::ReducedSystem& system, const HarmonicBalanceOptions& options)
     : impl_(std::make_unique<Impl>(system, options)) {
   Impl& d = *impl_;
-  if (system.friction)
-    throw InputError("harmonic balance: friction (3 rows per pair) is not implemented yet; set friction off");
   if (options.harmonics < 1) throw InputError("harmonic balance: harmonics must be >= 1, got " + std::to_string(options.harmonics));
   if (options.subharmonic != 1 && options.subharmonic != 2)
     throw InputError("harmonic balance: subharmonic must be 1 or 2, got " + std::to_string(options.subharmonic));
@@ -318,10 +433,26 @@ HarmonicBalance::HarmonicBalance(const reduced::ReducedSystem& system, const Har
     throw InputError("harmonic balance: time_samples " + std::to_string(d.N) + " < 4 H = " + std::to_string(4 * d.H));
   if (system.pair_modes.rows() != d.c || system.pair_modes.cols() != d.m || system.residual.rows() != d.c ||
       system.residual.cols() != d.c || system.load_modal.size() != d.m || system.load_residual.size() != d.c ||
-      system.initial_gap.size() != d.c)
+      system.initial_gap.size() != system.n_pairs())
     throw InputError("harmonic balance: the reduced system's sizes are inconsistent (m = " + std::to_string(d.m) +
                      ", c = " + std::to_string(d.c) + ")");
-  d.stiffness = system.normal_penalty * system.pair_area;
+  d.rows_per_pair = static_cast<int>(system.rows_per_pair());
+  d.stiffness = VectorX::Zero(d.c);
+  d.row_gap = VectorX::Zero(d.c);
+  for (Index pair = 0; pair < system.n_pairs(); ++pair) {
+    d.stiffness[d.rows_per_pair * pair] = system.normal_penalty * system.pair_area[pair];
+    d.row_gap[d.rows_per_pair * pair] = system.initial_gap[pair];
+  }
+  if (d.rows_per_pair == 3) {
+    d.basis.resize(d.N, 2 * d.H + 1);
+    for (int j = 0; j < d.N; ++j) {
+      d.basis(j, 0) = 1.0;
+      for (int k = 1; k <= d.H; ++k) {
+        d.basis(j, 2 * k - 1) = std::cos(2.0 * kPi * k * j / d.N);
+        d.basis(j, 2 * k) = std::sin(2.0 * kPi * k * j / d.N);
+      }
+    }
+  }
 
   std::vector<double> signal(d.N);
   std::vector<fftw_complex> spectrum(d.N / 2 + 1);
@@ -434,6 +565,9 @@ Stability HarmonicBalance::hill_stability(const Solution& sol, double tolerance)
   const int H = d.H;
   const int N = d.N;
   const double w0 = sol.omega / d.nu;
+  if (d.rows_per_pair == 3)
+    throw InputError("Hill's method with friction is not implemented: the return mapping's history is not a "
+                     "periodic stiffness (run the continuation with stability off)");
   if (tolerance <= 0.0) {
     double wmin = 0.0;
     for (Index r = 0; r < m; ++r)

@@ -19,8 +19,13 @@
 /// \f$\phi_r^T(\hat f F_0 + B^T P_0) = 0\f$, which the solver does not impose: `Solution::rigid_imbalance`
 /// reports it, and the sweep is meant for fixed (or statically balanced) bodies for now.
 ///
-/// **Contact law (frictionless).** Normal rows only: \f$p = \varepsilon_N A \max(0, -g)\f$ (MODEL.md
-/// eq. 25d) per sample. Friction (rows per pair 3) is not implemented yet: the constructor throws.
+/// **Contact law.** Per sample, normal rows: \f$p = \varepsilon_N A \max(0, -g)\f$ (MODEL.md eq. 25d).
+/// With friction (3 rows per pair) the tangential rows follow Coulomb's return mapping (eq. 15,
+/// `contact::coulomb_return_mapping`) on the sample-to-sample increments of the tangential gaps,
+/// marched over two periods from a zero traction at \f$\tau_0\f$; the second period is kept (its
+/// history is that of the periodic orbit once the first period has slipped; in permanent stick
+/// the mean tangential force stays the one of that start). Its Jacobian is propagated exactly
+/// through the march. Hill's method is frictionless only (throws with friction).
 #include <complex>
 #include <functional>
 #include <memory>

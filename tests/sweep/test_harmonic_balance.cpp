@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <complex>
@@ -308,6 +309,126 @@ TEST(HarmonicBalance, CoupledPairsJacobianAndCost) {
                   int(hb.n_unknowns()), std::chrono::duration<double, std::milli>(mid - start).count(),
                   std::chrono::duration<double, std::milli>(end - mid).count());
     }
+  }
+}
+
+/// One pair with friction (rows: normal, t1, t2) on `m` modes; R = 0 unless set.
+reduced::ReducedSystem friction_system(const MatrixX& pair_modes, const VectorX& load_modal, const VectorX& omega,
+                                       double zeta, double g0, double eps_n, double eps_t, double mu) {
+  reduced::ReducedSystem s;
+  s.omega = omega;
+  s.rayleigh_alpha = 2.0 * zeta * omega[0];
+  s.friction = true;
+  s.pair_area = VectorX::Constant(1, 1.0);
+  s.initial_gap = VectorX::Constant(1, g0);
+  s.normal_penalty = eps_n;
+  s.tangential_penalty = eps_t;
+  s.friction_coefficient = mu;
+  s.pair_modes = pair_modes;
+  s.residual = MatrixX::Zero(3, 3);
+  s.load_modal = load_modal;
+  s.load_residual = VectorX::Zero(3);
+  s.output_modes = MatrixX::Identity(omega.size(), omega.size());
+  s.output_residual_pairs = MatrixX::Zero(omega.size(), 3);
+  s.output_residual_load = VectorX::Zero(omega.size());
+  return s;
+}
+
+TEST(Friction, FullStickEqualsLinearSprings) {
+  // Always closed (deep preload) and never slipping (mu huge): for k >= 1 the pair acts as linear
+  // springs diag(eps_N A, eps_T A, eps_T A), G_k = (I + H_k K)^{-1} E_k exactly.
+  MatrixX bphi(3, 2);
+  bphi << 0.5, -0.2, 0.8, 0.3, -0.1, 0.9;
+  auto s = friction_system(bphi, Eigen::Vector2d(1e-6, -5e-7), Eigen::Vector2d(1.0, 1.6), 0.03, -1e-3, 2.0, 1.5, 1e6);
+  s.residual = 0.05 * MatrixX::Identity(3, 3);
+  s.residual(0, 1) = s.residual(1, 0) = 0.01;
+  s.load_residual = Eigen::Vector3d(1e-8, 0.0, -2e-8);
+  HarmonicBalanceOptions opt;
+  opt.harmonics = 3;
+  HarmonicBalance hb(s, opt);
+  for (double omega : {0.8, 1.3, 2.0}) {
+    const Solution sol = hb.solve(omega);
+    Eigen::MatrixXcd h(3, 3);
+    Eigen::VectorXcd e(3);
+    Eigen::VectorXcd d(2);
+    for (Index r = 0; r < 2; ++r) {
+      const double w = s.omega[r];
+      d[r] = 1.0 / Complex(w * w - omega * omega, 2.0 * s.damping_ratio(r) * w * omega);
+    }
+    h = bphi.cast<Complex>() * d.asDiagonal() * bphi.transpose().cast<Complex>() + s.residual.cast<Complex>();
+    e = bphi.cast<Complex>() * d.asDiagonal() * s.load_modal.cast<Complex>() + s.load_residual.cast<Complex>();
+    const Eigen::Matrix3cd k = Eigen::Vector3cd(2.0, 1.5, 1.5).asDiagonal();
+    const Eigen::VectorXcd g1 = (Eigen::Matrix3cd::Identity() + h * k).partialPivLu().solve(e);
+    for (Index i = 0; i < 3; ++i) {
+      EXPECT_NEAR(sol.gaps[3 + i], g1[i].real(), 1e-10 * g1.cwiseAbs().maxCoeff()) << "Omega " << omega;
+      EXPECT_NEAR(sol.gaps[6 + i], -g1[i].imag(), 1e-10 * g1.cwiseAbs().maxCoeff()) << "Omega " << omega;
+    }
+    EXPECT_LT(sol.gaps.tail(4 * 3).cwiseAbs().maxCoeff(), 1e-12 * g1.cwiseAbs().maxCoeff());
+    EXPECT_LE(sol.iterations, 2);
+  }
+}
+
+TEST(Friction, JenkinsOscillatorMatchesTimeIntegration) {
+  // One mode moving a preloaded pair tangentially (constant pressure eps_N |g0|): a Jenkins
+  // (spring-slider) oscillator, stuck w = sqrt(3), slipping w = 1. HB with the marched return
+  // mapping against RK4 with the slider force as a state.
+  MatrixX bphi(3, 1);
+  bphi << 0.0, 1.0, 0.0;
+  const double eps_t = 2.0, mu = 0.5, pressure = 1e-6;
+  const auto s = friction_system(bphi, VectorX::Constant(1, 1e-6), VectorX::Constant(1, 1.0), 0.02, -1e-6, 1.0, eps_t, mu);
+  HarmonicBalanceOptions opt;
+  opt.harmonics = 15;
+  HarmonicBalance hb(s, opt);
+  {  // Jacobian against finite differences in a partially slipping state
+    const double omega = 1.5;
+    const Solution sol = hb.solve(omega);
+    const MatrixX jac = hb.jacobian(omega, sol.gaps);
+    const double h = 1e-7 * hb.gap_scale();
+    double worst = 0.0;
+    for (Index j = 0; j < sol.gaps.size(); ++j) {
+      VectorX gp = sol.gaps, gm = sol.gaps;
+      gp[j] += h;
+      gm[j] -= h;
+      const VectorX fd = (hb.residual(omega, gp) - hb.residual(omega, gm)) / (2 * h) * hb.gap_scale();
+      worst = std::max(worst, (fd - jac.col(j)).cwiseAbs().maxCoeff());
+    }
+    std::printf("  friction Jacobian vs finite differences: max difference %.2e (Newton took %d iterations)\n", worst,
+                sol.iterations);
+    EXPECT_LT(worst, 1e-3);
+  }
+  const double limit = mu * pressure;
+  for (double omega : {1.2, 1.5, 2.2}) {
+    const Solution sol = hb.solve(omega);
+    // RK4 on (q, v, t): dt/dt = -eps_T dq/dt while |t| < limit or unloading, else 0
+    auto rhs = [&](const Eigen::Vector3d& y, double time) {
+      const double q = y[0], v = y[1], t = y[2];
+      const bool slipping = std::abs(t) >= limit && -eps_t * v * t > 0.0;
+      (void)q;
+      return Eigen::Vector3d(v, 1e-6 * std::cos(omega * time) + t - 2.0 * 0.02 * v - q, slipping ? 0.0 : -eps_t * v);
+    };
+    const int steps = 20000;
+    const double dt = 2.0 * kPi / omega / steps;
+    Eigen::Vector3d y = Eigen::Vector3d::Zero();
+    double time = 0.0;
+    std::vector<double> q_last;
+    for (int period = 0; period < 200; ++period)
+      for (int i = 0; i < steps; ++i) {
+        if (period == 199) q_last.push_back(y[0]);
+        const Eigen::Vector3d k1 = rhs(y, time), k2 = rhs(y + 0.5 * dt * k1, time + 0.5 * dt),
+                              k3 = rhs(y + 0.5 * dt * k2, time + 0.5 * dt), k4 = rhs(y + dt * k3, time + dt);
+        y += dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+        y[2] = std::clamp(y[2], -limit, limit);
+        time += dt;
+      }
+    Complex a1 = 0.0, a3 = 0.0;
+    for (int j = 0; j < steps; ++j) {
+      a1 += q_last[j] * std::polar(2.0 / steps, -2.0 * kPi * j / steps);
+      a3 += q_last[j] * std::polar(2.0 / steps, -6.0 * kPi * j / steps);
+    }
+    std::printf("  Jenkins Omega %.1f: HB A1 %.5e A3/A1 %.4e | RK4 A1 %.5e A3/A1 %.4e\n", omega, sol.amplitude(0, 1.0),
+                sol.ratios(0).third, std::abs(a1), std::abs(a3) / std::abs(a1));
+    EXPECT_NEAR(std::abs(sol.outputs(0, 1) - a1), 0.0, 2e-4 * std::abs(a1));
+    EXPECT_NEAR(std::abs(sol.outputs(0, 3) - a3), 0.0, 2e-4 * std::abs(a1));
   }
 }
 
