@@ -545,14 +545,14 @@ void HarmonicBalance::complete(Solution& sol) const {
       sol.outputs.col(k) = s.output_modes.cast<Complex>() * sol.modal.col(k) +
                            s.output_residual_pairs.cast<Complex>() * pk + s.output_residual_load.cast<Complex>() * load;
   }
-  // H-convergence: share of the gap response in the top harmonics
-  const int first_top = std::min(d.H, std::max(1, static_cast<int>(std::ceil((1.0 - d.options.top_share) * d.H)) + 0));
+  // H-convergence: share of the gap response in the top harmonics k >= first_top
+  const int first_top = std::clamp(static_cast<int>(std::floor((1.0 - d.options.top_share) * d.H)) + 1, 1, d.H);
   double total = 0.0, top = 0.0;
   for (int k = 1; k <= d.H; ++k)
     for (Index i = 0; i < d.c; ++i) {
-      const double a2 = std::norm(d.amplitude(sol.gaps, k, i) - (k == d.nu ? Complex(0.0) : Complex(0.0)));
+      const double a2 = std::norm(d.amplitude(sol.gaps, k, i));
       total += a2;
-      if (k > first_top || k == d.H) top += a2;
+      if (k >= first_top) top += a2;
     }
   sol.top_harmonic_share = total > 0.0 ? std::sqrt(top / total) : 0.0;
   sol.harmonics_flagged = sol.top_harmonic_share > d.options.top_threshold;
@@ -577,11 +577,17 @@ Stability HarmonicBalance::hill_stability(const Solution& sol, double tolerance)
   // contact stiffness condensed through the massless boundary, in modal coordinates, per sample
   const MatrixX gaps = d.to_time(sol.gaps);
   std::vector<MatrixX> stiff(N, MatrixX::Zero(m, m));
+  std::vector<Index> previous_active;
+  MatrixX previous_stiffness = MatrixX::Zero(m, m);
   for (int j = 0; j < N; ++j) {
     std::vector<Index> active;
     for (Index i = 0; i < d.c; ++i)
       if (gaps(i, j) < 0.0 && d.stiffness[i] > 0.0) active.push_back(i);
     if (active.empty()) continue;
+    if (active == previous_active) {  // consecutive samples mostly share the active set
+      stiff[j] = previous_stiffness;
+      continue;
+    }
     const Index na = static_cast<Index>(active.size());
     MatrixX flex(na, na);
     MatrixX bphi(na, m);
@@ -591,6 +597,8 @@ Stability HarmonicBalance::hill_stability(const Solution& sol, double tolerance)
       bphi.row(a) = s.pair_modes.row(active[a]);
     }
     stiff[j] = bphi.transpose() * flex.ldlt().solve(bphi);
+    previous_active = active;
+    previous_stiffness = stiff[j];
   }
   // Fourier coefficients K_j = (1/N) sum_n K(tau_n) e^{-i j tau_n}, j = 0..2H, one r2c per entry
   std::vector<ComplexMatrixX> khat(2 * H + 1, ComplexMatrixX::Zero(m, m));
@@ -691,6 +699,13 @@ Stability HarmonicBalance::hill_stability(const Solution& sol, double tolerance)
     for (int k = -H; k <= H; ++k) st.critical_mode.col(k + H) = v.segment((k + H) * m, m);
   }
   return st;
+}
+
+VectorX resize_harmonics(const VectorX& gaps, Index rows, int harmonics) {
+  VectorX out = VectorX::Zero(rows * (2 * harmonics + 1));
+  const Index n = std::min(out.size(), gaps.size());
+  out.head(n) = gaps.head(n);
+  return out;
 }
 
 VectorX period_doubled_guess(const reduced::ReducedSystem& system, const Solution& period_one,

@@ -142,6 +142,10 @@ class HarmonicBalance {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Gap harmonics truncated or zero-padded to `harmonics` (rows = c): restart a point with more
+/// harmonics when `Solution::harmonics_flagged` says so.
+VectorX resize_harmonics(const VectorX& gaps, Index rows, int harmonics);
+
 /// A first guess for the nu = 2 branch born at a period doubling of `period_one` (nu = 1): its gaps
 /// on the even harmonics of Omega/2 and the critical Hill eigenvector of `stability`, mapped to the
 /// gaps through B Phi, on the odd ones, scaled so that its largest gap harmonic is `amplitude` [m].
