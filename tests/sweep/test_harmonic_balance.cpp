@@ -216,7 +216,7 @@ TEST(HarmonicBalance, BilinearOscillatorMatchesTimeIntegration) {
   std::printf("  H-convergence of A1, A2, A3 (relative to the time integration's A1)\n");
   for (double omega : {0.7, 1.29, 2.1}) {
     TimeIntegration ti{s, omega};
-    ti.steps_per_period = 4000;
+    ti.steps_per_period = 16000;
     VectorX q = VectorX::Zero(1), v = VectorX::Zero(1);
     double t = 0.0;
     ti.run(q, v, t, 250);  // e^{-zeta w t}: transients decayed far below 1e-8
@@ -226,7 +226,7 @@ TEST(HarmonicBalance, BilinearOscillatorMatchesTimeIntegration) {
     for (int harmonics : {5, 10, 20, 40}) {
       HarmonicBalanceOptions opt;
       opt.harmonics = harmonics;
-      opt.time_samples = 16 * harmonics;
+      opt.time_samples = 0;  // default 4096
       HarmonicBalance hb(s, opt);
       const Solution sol = hb.solve(omega);
       double err[3];
@@ -234,7 +234,7 @@ TEST(HarmonicBalance, BilinearOscillatorMatchesTimeIntegration) {
       std::printf("    H = %2d: |dA1| %.2e |dA2| %.2e |dA3| %.2e  top share %.2e%s  Newton %d\n", harmonics, err[0],
                   err[1], err[2], sol.top_harmonic_share, sol.harmonics_flagged ? " (flagged)" : "", sol.iterations);
       if (harmonics == 40)
-        for (int k = 0; k < 3; ++k) EXPECT_LT(err[k], 1e-4) << "Omega " << omega << " order " << k + 1;
+        for (int k = 0; k < 3; ++k) EXPECT_LT(err[k], 2e-5) << "Omega " << omega << " order " << k + 1;
       if (harmonics == 5) EXPECT_GT(err[0] + err[1] + err[2], 1e-6);  // the truncation shows
       if (harmonics == 40) {  // raising H from a converged H = 10 point lands on the same solution
         HarmonicBalanceOptions low = opt;
