@@ -112,12 +112,12 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
         rhs.head(n) = -c.residual;
         rhs[n] = -(t.dot(y_new - y) - ds);
         const VectorX delta = a.partialPivLu().solve(rhs);
-        // backtracking on the extended residual: piecewise-linear contact makes plain Newton cycle
-        // between two active-sample patterns near a kink
+        // full steps first, then backtracking on the extended residual: piecewise-linear contact can
+        // make plain Newton cycle between two active-sample patterns near a kink
         const double merit = rhs.squaredNorm();
         double alpha = 1.0;
         VectorX trial = y_new + delta;
-        while (alpha > 1.0 / 256.0) {
+        while (iterations > options.target_iterations && alpha > 1.0 / 256.0) {
           const double m_trial = extended_merit(hb, trial, omega_ref, t, y, ds);
           if (m_trial < merit) break;
           alpha *= 0.5;

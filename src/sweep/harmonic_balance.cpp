@@ -368,11 +368,12 @@ struct HarmonicBalance::Impl {
     while (norm > options.tolerance && it < options.max_iterations) {
       ++it;
       const VectorX step = jacobian(rec, gaps, factor).partialPivLu().solve(-r) * scale;
-      // backtracking on the 2-norm of the residual (piecewise-linear contact makes plain Newton cycle)
+      // full steps first (the piecewise-linear contact mostly converges in a few), then backtracking
+      // on the 2-norm of the residual against the cycles plain Newton can fall into
       double alpha = 1.0;
       VectorX trial = gaps + step;
       VectorX r_trial = residual(rec, trial, factor);
-      while (r_trial.norm() > r.norm() && alpha > 1.0 / 64.0) {
+      while (it > options.max_iterations / 4 && r_trial.norm() > r.norm() && alpha > 1.0 / 64.0) {
         alpha *= 0.5;
         trial = gaps + alpha * step;
         r_trial = residual(rec, trial, factor);
