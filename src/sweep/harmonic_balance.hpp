@@ -99,7 +99,9 @@ struct Stability {
   ComplexMatrixX critical_mode;
 };
 
-/// Harmonic balance of a reduced system. Borrows the system: it must outlive this object.
+/// Harmonic balance of a reduced system. Borrows the system: it must outlive this object. The
+/// constructor makes the FFTW plans (FFTW's planner is not thread-safe: construct from one thread);
+/// the const members may then run concurrently.
 class HarmonicBalance {
  public:
   HarmonicBalance(const reduced::ReducedSystem& system, const HarmonicBalanceOptions& options);

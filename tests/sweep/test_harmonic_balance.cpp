@@ -11,6 +11,7 @@
 #include <complex>
 #include <cstdio>
 #include <cstdlib>
+#include <cstdlib>
 
 #include "core/errors.hpp"
 #include "sweep/harmonic_balance.hpp"
@@ -300,8 +301,10 @@ TEST(HarmonicBalance, CoupledPairsJacobianAndCost) {
     EXPECT_LT((y1 - sol.outputs.col(1)).cwiseAbs().maxCoeff(), 1e-12 * y1.cwiseAbs().maxCoeff());
   }
   std::printf("  cost of one Newton iteration (residual + Jacobian + LU), m = 10 modes, N = 4096\n");
-  for (Index c : {1, 8, 32}) {
-    for (int harmonics : {5, 10, 20}) {
+  const bool long_table = std::getenv("CRACKLE_SWEEP_COST") != nullptr;  // adds 128 pairs and H = 40
+  for (Index c : {1, 8, 32, 128}) {
+    for (int harmonics : {5, 10, 20, 40}) {
+      if (!long_table && (c > 32 || harmonics > 20)) continue;
       const auto s = random_system(10, c, 11);
       HarmonicBalanceOptions opt;
       opt.harmonics = harmonics;
@@ -438,6 +441,35 @@ TEST(Friction, JenkinsOscillatorMatchesTimeIntegration) {
                 sol.ratios(0).third, std::abs(a1), std::abs(a3) / std::abs(a1));
     EXPECT_NEAR(std::abs(sol.outputs(0, 1) - a1), 0.0, 2e-4 * std::abs(a1));
     EXPECT_NEAR(std::abs(sol.outputs(0, 3) - a3), 0.0, 2e-4 * std::abs(a1));
+  }
+}
+
+TEST(Friction, CostOfOneNewtonIteration) {
+  std::printf("  with friction (3 rows per pair, tangent marched over 2N = 8192 samples), m = 10 modes\n");
+  for (Index pairs : {1, 8}) {
+    for (int harmonics : {5, 10, 20}) {
+      reduced::ReducedSystem s = random_system(10, 3 * pairs, 5);
+      s.friction = true;
+      s.pair_area = VectorX::Constant(pairs, 0.5);
+      s.initial_gap = -1e-7 * VectorX::Ones(pairs);
+      s.tangential_penalty = 3.0;
+      s.friction_coefficient = 0.3;
+      HarmonicBalanceOptions opt;
+      opt.harmonics = harmonics;
+      HarmonicBalance hb(s, opt);
+      const VectorX g = hb.linear_gaps(2.0);
+      const auto start = std::chrono::steady_clock::now();
+      const VectorX r = hb.residual(2.0, g);
+      const MatrixX jac = hb.jacobian(2.0, g);
+      const auto mid = std::chrono::steady_clock::now();
+      const VectorX step = jac.partialPivLu().solve(r);
+      const auto end = std::chrono::steady_clock::now();
+      EXPECT_TRUE(step.allFinite());
+      EXPECT_GT((jac - MatrixX::Identity(jac.rows(), jac.cols())).cwiseAbs().maxCoeff(), 0.0);  // in contact
+      std::printf("    pairs %3d H %2d unknowns %5d: residual+Jacobian %8.2f ms, LU %8.2f ms\n", int(pairs), harmonics,
+                  int(hb.n_unknowns()), std::chrono::duration<double, std::milli>(mid - start).count(),
+                  std::chrono::duration<double, std::milli>(end - mid).count());
+    }
   }
 }
 
