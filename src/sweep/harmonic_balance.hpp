@@ -129,7 +129,7 @@ class HarmonicBalance {
   /// Jacobian dr/dG * s (dimensionless, = I - H dP/dG) and, if `d_omega` is not null, dr/dOmega.
   MatrixX jacobian(double omega, const VectorX& gaps, VectorX* d_omega = nullptr) const;
 
-  /// Pair forces in time at the N samples (c x N) and their harmonics (same layout as the gaps).
+  /// Harmonics of the pair forces P(G) by AFT (same layout as the gaps) [N].
   VectorX pair_forces(const VectorX& gaps) const;
 
   /// Fills forces, modal amplitudes, outputs and the H-convergence indicator of a converged point.
@@ -181,7 +181,9 @@ using ProgressCallback = std::function<bool(const BranchPoint&)>;
 /// Pseudo-arclength continuation in (G, Omega) from `omega_from` to `omega_to` [rad/s], starting
 /// from the linear solution at `omega_from` (or from `start` when given). Tangent predictor,
 /// Keller's corrector with the arclength constraint, step adapted to the iteration count; passes
-/// folds. Ends when Omega leaves [min, max] of the two ends or after max_points.
+/// folds. Ends when Omega leaves [min, max] of the two ends or after max_points; if the corrector
+/// fails down to min_step it returns the branch so far (check the last point's Omega). Hill's
+/// method needs a frictionless system (set `stability` off with friction).
 std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega_from, double omega_to,
                                          const ContinuationOptions& options = ContinuationOptions(),
                                          const ProgressCallback& progress = ProgressCallback(),
