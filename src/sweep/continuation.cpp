@@ -1,0 +1,158 @@
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+#include "core/errors.hpp"
+#include "sweep/harmonic_balance.hpp"
+
+namespace crackle::sweep {
+
+namespace {
+
+/// Scaled state y = (G / s, Omega / Omega_ref) and its extended Jacobian [dr/dx, dr/dw].
+struct Extended {
+  MatrixX jacobian;  ///< n x (n + 1)
+  VectorX residual;  ///< n
+};
+
+Extended evaluate(const HarmonicBalance& hb, const VectorX& y, double omega_ref) {
+  const Index n = hb.n_unknowns();
+  const double omega = y[n] * omega_ref;
+  const VectorX gaps = y.head(n) * hb.gap_scale();
+  Extended e;
+  VectorX d_omega;
+  e.jacobian.resize(n, n + 1);
+  e.jacobian.leftCols(n) = hb.jacobian(omega, gaps, &d_omega);
+  e.jacobian.col(n) = d_omega * omega_ref;
+  e.residual = hb.residual(omega, gaps);
+  return e;
+}
+
+double extended_merit(const HarmonicBalance& hb, const VectorX& y, double omega_ref, const VectorX& t,
+                      const VectorX& y_prev, double ds) {
+  const Index n = hb.n_unknowns();
+  const double constraint = t.dot(y - y_prev) - ds;
+  return hb.residual(y[n] * omega_ref, y.head(n) * hb.gap_scale()).squaredNorm() + constraint * constraint;
+}
+
+/// Unit tangent: null vector of the n x (n+1) Jacobian, oriented along `previous`.
+VectorX tangent(const MatrixX& jacobian, const VectorX& previous) {
+  const Index n = jacobian.rows();
+  MatrixX a(n + 1, n + 1);
+  a.topRows(n) = jacobian;
+  a.row(n) = previous.transpose();
+  VectorX rhs = VectorX::Zero(n + 1);
+  rhs[n] = 1.0;
+  VectorX t = a.partialPivLu().solve(rhs);
+  t.normalize();
+  if (t.dot(previous) < 0.0) t = -t;
+  return t;
+}
+
+}  // namespace
+
+std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega_from, double omega_to,
+                                         const ContinuationOptions& options, const ProgressCallback& progress,
+                                         const Solution* start) {
+  if (!(omega_from > 0.0) || !(omega_to > 0.0) || omega_from == omega_to)
+    throw InputError("continuation: need two distinct positive frequencies, got " + format_number(omega_from) +
+                     " and " + format_number(omega_to) + " rad/s");
+  const Index n = hb.n_unknowns();
+  const double omega_ref = omega_from;
+  const double tolerance = hb.options().tolerance;
+  const double w_low = std::min(omega_from, omega_to) / omega_ref;
+  const double w_high = std::max(omega_from, omega_to) / omega_ref;
+  const double direction = omega_to > omega_from ? 1.0 : -1.0;
+
+  std::vector<BranchPoint> branch;
+  auto add_point = [&](Solution&& sol, double tangent_omega) {
+    BranchPoint point;
+    point.solution = std::move(sol);
+    point.tangent_omega = tangent_omega;
+    if (options.stability) point.stability = hb.hill_stability(point.solution);
+    if (!branch.empty()) {
+      const BranchPoint& last = branch.back();
+      point.fold = (last.tangent_omega > 0.0) != (point.tangent_omega > 0.0);
+      if (options.stability) {
+        const Stability& a = last.stability;
+        const Stability& b = point.stability;
+        point.period_doubling = a.unstable_negative != b.unstable_negative;
+        point.stability_change = (a.unstable_positive + a.unstable_negative + a.unstable_complex) !=
+                                 (b.unstable_positive + b.unstable_negative + b.unstable_complex);
+      }
+    }
+    branch.push_back(std::move(point));
+    return progress ? progress(branch.back()) : true;
+  };
+
+  Solution first = start ? *start : hb.solve(omega_from);
+  VectorX y(n + 1);
+  y.head(n) = first.gaps / hb.gap_scale();
+  y[n] = first.omega / omega_ref;
+  VectorX t_prev = VectorX::Zero(n + 1);
+  t_prev[n] = direction;
+  Extended e = evaluate(hb, y, omega_ref);
+  VectorX t = tangent(e.jacobian, t_prev);
+  if (!add_point(std::move(first), t[n])) return branch;
+
+  double ds = options.initial_step;
+  const int max_corrector = std::max(8, 3 * options.target_iterations);
+  while (static_cast<int>(branch.size()) < options.max_points) {
+    bool accepted = false;
+    VectorX y_new;
+    int iterations = 0;
+    while (!accepted) {
+      y_new = y + ds * t;
+      for (iterations = 1; iterations <= max_corrector; ++iterations) {
+        Extended c = evaluate(hb, y_new, omega_ref);
+        MatrixX a(n + 1, n + 1);
+        a.topRows(n) = c.jacobian;
+        a.row(n) = t.transpose();
+        VectorX rhs(n + 1);
+        rhs.head(n) = -c.residual;
+        rhs[n] = -(t.dot(y_new - y) - ds);
+        const VectorX delta = a.partialPivLu().solve(rhs);
+        // full steps first, then backtracking on the extended residual: piecewise-linear contact can
+        // make plain Newton cycle between two active-sample patterns near a kink
+        const double merit = rhs.squaredNorm();
+        double alpha = 1.0;
+        VectorX trial = y_new + delta;
+        while (iterations > options.target_iterations && alpha > 1.0 / 256.0) {
+          const double m_trial = extended_merit(hb, trial, omega_ref, t, y, ds);
+          if (m_trial < merit) break;
+          alpha *= 0.5;
+          trial = y_new + alpha * delta;
+        }
+        y_new = trial;
+        if (!y_new.allFinite()) break;
+        const double res = hb.residual(y_new[n] * omega_ref, y_new.head(n) * hb.gap_scale()).lpNorm<Eigen::Infinity>();
+        if (res <= tolerance && delta.lpNorm<Eigen::Infinity>() <= 1e3 * tolerance + 1e-8) {
+          accepted = true;
+          break;
+        }
+      }
+      if (!accepted) {
+        ds *= 0.5;
+        if (ds < options.min_step) return branch;  // cannot go on: the branch so far
+      }
+    }
+    e = evaluate(hb, y_new, omega_ref);
+    const VectorX t_new = tangent(e.jacobian, t);
+    y = y_new;
+    t = t_new;
+    Solution sol;
+    sol.omega = y[n] * omega_ref;
+    sol.gaps = y.head(n) * hb.gap_scale();
+    sol.iterations = iterations;
+    sol.residual = e.residual.lpNorm<Eigen::Infinity>();
+    sol.converged = true;
+    hb.complete(sol);
+    if (!add_point(std::move(sol), t[n])) return branch;
+    if (y[n] > w_high || y[n] < w_low) break;
+    const double factor = std::clamp(static_cast<double>(options.target_iterations) / std::max(iterations, 1), 0.5, 2.0);
+    ds = std::clamp(ds * factor, options.min_step, options.max_step);
+  }
+  return branch;
+}
+
+}  // namespace crackle::sweep
