@@ -18,6 +18,7 @@
 ///   pair-spring period (much smaller than the stability limit for a stiff penalty).
 #include <vector>
 
+#include "core/defaults.hpp"
 #include "core/types.hpp"
 #include "fem/assembly.hpp"
 #include "mesh/mesh.hpp"
@@ -27,10 +28,10 @@ namespace crackle::contact {
 /// Default c of the automatic normal penalty \f$\varepsilon_N = c\, C_{nnnn}/h\f$ with implicit pair
 /// springs: stiff (the closed crack adds the compliance of a layer h/1000 thick, and the numerical
 /// dissipation of the closed springs falls as 1/c) at no cost in time step.
-inline constexpr double kDefaultPenaltyFactor = 1000.0;
+inline constexpr double kDefaultPenaltyFactor = defaults::kImplicitPenaltyFactor;
 /// Default c with explicit pair springs: their frequency stays at that of the elements, so that
 /// they barely shrink the stable time step and central differences keep contact events stable.
-inline constexpr double kDefaultExplicitPenaltyFactor = 1.0;
+inline constexpr double kDefaultExplicitPenaltyFactor = defaults::kExplicitPenaltyFactor;
 
 enum class ContactIntegration {
   implicit,         ///< penalty law at U(i+1), closed form per pair (default)

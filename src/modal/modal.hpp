@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/defaults.hpp"
 #include "core/types.hpp"
 #include "fem/assembly.hpp"
 #include "fem/constraints.hpp"
@@ -30,7 +31,7 @@ enum class MacWeighting {
 };
 
 struct ModalOptions {
-  int modes = 10;  ///< ELASTIC modes per variant (rigid-body modes are found in addition)
+  int modes = defaults::kModes;  ///< ELASTIC modes per variant (rigid-body modes are found in addition)
   /// Variants to solve; empty: uncracked and open if the mesh has a crack, else uncracked only.
   std::vector<mesh::Variant> variants;
   Solver solver = Solver::slepc;

@@ -124,13 +124,14 @@ Param build_parameters() {
         number("friction", "Coulomb friction coefficient mu (tangential penalty with a return mapping).")
             .at_least(0).defaults_to("0"),
         choice("integration", "implicit: the penalty law at U(i+1), solved per pair in closed form, so the "
-                              "springs do not limit the time step (auto penalty 1000 E/h); explicit: the "
-                              "force at U(i) as in MODEL.md eq. 27, the springs enter omega_max (auto penalty "
-                              "E/h).", {"implicit", "explicit"}).defaults_to("implicit"),
+                              "springs do not limit the time step (auto penalty " +
+                                  format_number(defaults::kImplicitPenaltyFactor) + " E/h); explicit: the force "
+                              "at U(i) as in MODEL.md eq. 27, the springs enter omega_max (auto penalty " +
+                                  format_number(defaults::kExplicitPenaltyFactor) + " E/h).", {"implicit", "explicit"}).defaults_to("implicit"),
       }),
     }).optional_section(),
     map_of("modal", "Modal analysis of the linear limits of the cracked body; optional.", {
-      integer("modes", "Number of lowest modes per variant.").at_least(1).defaults_to("10"),
+      integer("modes", "Number of lowest modes per variant.").at_least(1).defaults_to(std::to_string(defaults::kModes)),
       choice("variants", "Linear limits to analyse: faces tied (uncracked) or free (open); open needs a crack.",
              {"uncracked", "open"}).list(1, 2).distinct()
           .defaults_to("[uncracked, open] with a crack, else [uncracked]", default_variants),
@@ -180,7 +181,7 @@ Param build_parameters() {
                           "excitation period is a whole number of steps).").with_unit("s").above(0)
           .or_word("auto").defaults_to("auto"),
       number("safety_factor", "Fraction of the critical time step used by time_step: auto.").above(0).at_most(1)
-          .defaults_to("0.9"),
+          .defaults_to(format_number(defaults::kSafetyFactor)),
       boolean("force_time_step", "Run a time step above the critical one anyway (the health checks stop a "
                                  "diverging run).").defaults_to("false"),
       choice("variant", "Run the body with its crack (open faces with contact) or with the faces tied.",

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/defaults.hpp"
 #include "core/types.hpp"
 #include "mesh/box.hpp"
 
@@ -63,7 +64,7 @@ struct BoundarySection {
 
 /// The `modal:` section (issue 3).
 struct ModalSection {
-  int modes = 10;
+  int modes = defaults::kModes;
   std::vector<std::string> variants;  ///< "uncracked" and/or "open"; defaulted by the loader
   std::string solver = "slepc";       ///< slepc | arpack
   std::string mass = "consistent";    ///< consistent | lumped
@@ -121,7 +122,7 @@ struct TransientSection {
   std::optional<double> periods;   ///< run length in excitation periods
   std::optional<double> duration;  ///< run length [s]
   std::optional<double> time_step;  ///< [s]; empty: auto
-  double safety_factor = 0.9;
+  double safety_factor = defaults::kSafetyFactor;
   bool force_time_step = false;
   std::string variant = "open";
   std::vector<ProbeSection> probes;

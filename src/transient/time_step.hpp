@@ -2,13 +2,14 @@
 /// \file Stable time step of central differences (MODEL.md sec. 4): \f$\Delta t \le 2/\omega_{max}\f$,
 /// with stiffness-proportional damping \f$(2/\omega_{max})(\sqrt{1+\xi^2} - \xi)\f$,
 /// \f$\xi = \beta\omega_{max}/2\f$ (Akantu getStableTimeStep).
+#include "core/defaults.hpp"
 #include "core/types.hpp"
 #include "fem/operator.hpp"
 
 namespace crackle::transient {
 
 struct TimeStepOptions {
-  double safety_factor = 0.9;  ///< time step used when none is given: safety_factor * dt_critical
+  double safety_factor = defaults::kSafetyFactor;  ///< time step used when none is given: safety_factor * dt_critical
   /// The estimate of omega_max is raised by this fraction: Lanczos approaches omega_max from below.
   double margin = 0.02;
   int max_iterations = 300;    ///< Lanczos steps at most
