@@ -4,6 +4,7 @@
 #include <cmath>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <set>
 
 #include "pipeline/commands.hpp"
@@ -13,9 +14,11 @@
 #include "io/files.hpp"
 #include "io/vtu.hpp"
 #include "pipeline/model.hpp"
+#include "pipeline/release.hpp"
 #include "modal/modal.hpp"
 #include "spectral/harmonics.hpp"
 #include "spectral/plot.hpp"
+#include "spectral/ringdown.hpp"
 #include "spectral/signature.hpp"
 #include "spectral/spectrum.hpp"
 #include "transient/damping.hpp"
@@ -45,6 +48,10 @@ std::vector<mesh::Variant> needed_variants(const scene::Scene& scene, std::strin
     if (of != "open") variants.insert(mesh::Variant::uncracked);
     if (of != "uncracked") variants.insert(mesh::Variant::open);
     reason = "transient.excitation.frequency refers to mode " + std::to_string(transient.excitation->mode);
+  }
+  if (transient.release && transient.release->kind == "mode") {
+    variants.insert(transient.release->variant == "open" ? mesh::Variant::open : mesh::Variant::uncracked);
+    if (reason.empty()) reason = "transient.release.mode refers to mode " + std::to_string(transient.release->mode);
   }
   if (transient.damping.at_mode > 0) {
     variants.insert(mesh::Variant::uncracked);
@@ -126,6 +133,7 @@ std::optional<modal::ModalResult> run_modal_stage(const scene::Scene& scene, con
   modal_settings.variants = variants;
   int highest = scene.has_modal_section ? scene.modal.modes : 1;
   if (section.excitation) highest = std::max(highest, section.excitation->mode);
+  if (section.release) highest = std::max(highest, section.release->mode);
   modal_settings.modes = std::max(highest, section.damping.at_mode);
   modal_settings.cache_directory = options.modal_cache;
   modal::ModalResult modes = modal::run_modal(
@@ -144,6 +152,7 @@ struct TransientSetup {
   mesh::Variant variant = mesh::Variant::open;
   double frequency = 0.0;  ///< excitation frequency [Hz], 0 without a harmonic excitation
   std::shared_ptr<contact::ContactForce> contact;  ///< null without contact
+  std::optional<ReleaseReport> release;            ///< how U(0) was made from transient.release
 };
 
 /// The excitation as a load, and its frequency (0 for a pulse).
@@ -216,9 +225,19 @@ TransientSetup transient_setup(const scene::Scene& scene, const Model& model,
   setup.variant = section.variant == "open" ? mesh::Variant::open : mesh::Variant::uncracked;
   settings.variant = setup.variant;
   const fem::System& system = *model.system(setup.variant);
-  if (setup.variant == mesh::Variant::open && model.mesh.has_crack()) {
-    setup.contact = std::make_shared<contact::ContactForce>(model.mesh, system.dofs(), model.materials, scene_contact(scene));
+  const bool with_contact =
+      setup.variant == mesh::Variant::open && model.mesh.has_crack() && scene.contact.model != "none";
+  const contact::ContactOptions contact_options = scene_contact(scene);
+  if (with_contact) {
+    setup.contact = std::make_shared<contact::ContactForce>(model.mesh, system.dofs(), model.materials, contact_options);
     setup.problem.terms.push_back(setup.contact);
+  }
+  if (section.release) {
+    ReleaseReport report;
+    setup.problem.initial =
+        release_state(*section.release, model, setup.variant, with_contact ? &contact_options : nullptr,
+                      modes ? &*modes : nullptr, scene.file, &report);
+    setup.release = report;
   }
   add_initial_fields(section, model, system.dofs(), setup.problem.initial);
   for (const scene::ProbeSection& probe : section.probes) {
@@ -341,6 +360,150 @@ void SpectrumMonitor::write(const scene::Scene& scene, const std::filesystem::pa
   io::write_json(directory / "spectrum.json", spectrum_json);
 }
 
+/// The modal frequency a ring-down is compared with: bilinear for a breathing crack (the open body
+/// with contact), else the run variant's own; the mode nearest the measured frequency.
+nlohmann::json modal_comparison(const modal::ModalResult& modes, const TransientSetup& setup, double frequency_hz) {
+  nlohmann::json comparison;
+  const bool breathing = setup.contact != nullptr;
+  double best = std::numeric_limits<double>::infinity();
+  if (breathing) {
+    for (std::size_t i = 0; i < modes.pairs.size(); ++i) {
+      const modal::ModePair& pair = modes.pairs[i];
+      if (!pair.paired || std::abs(pair.f_bilinear_hz - frequency_hz) >= best) continue;
+      best = std::abs(pair.f_bilinear_hz - frequency_hz);
+      comparison = {{"reference", "bilinear"},
+                    {"mode", pair.uncracked_mode + 1},
+                    {"f_uncracked_hz", pair.f_uncracked_hz},
+                    {"f_open_hz", pair.f_open_hz},
+                    {"f_bilinear_hz", pair.f_bilinear_hz},
+                    {"reference_hz", pair.f_bilinear_hz},
+                    {"relative_difference", frequency_hz / pair.f_bilinear_hz - 1.0}};
+    }
+    return comparison;
+  }
+  const modal::VariantResult* variant = modes.find(setup.variant);
+  if (!variant) return comparison;
+  const std::string name = setup.variant == mesh::Variant::open ? "open" : "uncracked";
+  for (int i = 0; i < variant->modes.n_modes(); ++i) {
+    const double f = variant->modes.frequencies_hz[i];
+    if (std::abs(f - frequency_hz) >= best) continue;
+    best = std::abs(f - frequency_hz);
+    comparison = {{"reference", name}, {"mode", i + 1}, {"reference_hz", f},
+                  {"relative_difference", frequency_hz / f - 1.0}};
+  }
+  return comparison;
+}
+
+/// Stage 3 without a harmonic excitation (free vibration, a pulse, or none): per probe a ring-down
+/// analysis (spectral::analyse_ringdown) compared with the modal frequencies when they are at hand,
+/// the envelope of its orders plotted; after a pulse also the FRF estimate H = X/F (CSV and plot).
+void write_ringdown_spectrum(const scene::Scene& scene, const fs::path& directory, const transient::ProbeHistory& history,
+                             const TransientSetup& setup, const std::optional<modal::ModalResult>& modes,
+                             std::ostream& out) {
+  const scene::SpectrumSection& spectrum = *scene.spectrum;
+  const scene::TransientSection& section = *scene.transient;
+  const std::optional<scene::ExcitationSection>& excitation = section.excitation;
+  const bool pulse = excitation && excitation->kind == "pulse";
+  const int default_component =
+      excitation ? excitation->direction : (section.release && section.release->kind == "static" ? section.release->direction : 2);
+  if (history.time.size() < 2) throw SolverError(scene.file + ": spectrum: the run recorded fewer than 2 samples");
+  const spectral::Sampling sampling{history.time[1] - history.time[0], history.time.front()};
+  spectral::RingdownOptions options;
+  options.max_order = spectrum.harmonics;
+  options.subharmonics = spectrum.subharmonics;
+  options.window_periods = spectrum.ringdown_window_periods + (spectrum.subharmonics && spectrum.ringdown_window_periods % 2);
+  options.start_time = spectrum.ringdown_start.value_or(pulse ? excitation->duration : 0.0);
+  nlohmann::json probes_json = nlohmann::json::object();
+  spectral::PlotOptions plot;
+  for (std::size_t p = 0; p < section.probes.size(); ++p) {
+    const scene::ProbeSection& probe = section.probes[p];
+    const int component = probe.component >= 0 ? probe.component : default_component;
+    const std::string axis = axis_name(component);
+    const std::vector<double>& values = history.values[9 * p + component];
+    nlohmann::json probe_json = {{"component", axis}};
+    const spectral::RingdownAnalysis analysis = spectral::analyse_ringdown(values, sampling, options);
+    nlohmann::json ringdown = spectral::ringdown_json(analysis);
+    if (modes) {
+      const nlohmann::json comparison = modal_comparison(*modes, setup, analysis.natural_frequency_hz);
+      if (!comparison.is_null()) ringdown["modal_comparison"] = comparison;
+    }
+    probe_json["ringdown"] = ringdown;
+    out << "ringdown " << probe.name << " (u_" << axis << "): f = " << std::setprecision(8) << analysis.frequency_hz
+        << " Hz, damping ratio " << std::setprecision(4) << analysis.damping_ratio;
+    if (ringdown.contains("modal_comparison")) {
+      const nlohmann::json& comparison = ringdown["modal_comparison"];
+      out << ", " << comparison["reference"].get<std::string>() << " f = " << std::setprecision(8)
+          << comparison["reference_hz"].get<double>() << " Hz (" << std::setprecision(3)
+          << 100.0 * comparison["relative_difference"].get<double>() << " %)";
+    }
+    if (analysis.harmonics.size() > 1) {
+      out << std::setprecision(4);
+      for (const spectral::RingdownHarmonic& harmonic : analysis.harmonics) {
+        if (harmonic.order != 1.0) out << ", A" << harmonic.order << "/A1 = " << harmonic.relative_amplitude;
+      }
+    }
+    out << "\n";
+    std::optional<spectral::FrequencyResponse> frf;
+    if (pulse) {
+      std::vector<double> force(history.time.size());
+      for (std::size_t i = 0; i < force.size(); ++i) {
+        force[i] = spectral::half_sine_pulse(history.time[i], 0.0, excitation->duration, excitation->amplitude);
+      }
+      const double nyquist = 0.5 / sampling.time_step;
+      frf = spectral::estimate_frf(values, force, sampling, 0.0, std::min(1.0 / excitation->duration, nyquist));
+      io::CsvTable table;
+      table.add("frequency [Hz]", frf->frequency_hz);
+      table.add("|H| [m/N]", frf->magnitude);
+      table.add("arg H [rad]", frf->phase_rad);
+      std::vector<double> real, imaginary;
+      for (const std::complex<double>& value : frf->response) {
+        real.push_back(value.real());
+        imaginary.push_back(value.imag());
+      }
+      table.add("Re H [m/N]", real);
+      table.add("Im H [m/N]", imaginary);
+      io::write_csv(directory / ("frf_" + probe.name + ".csv"), table);
+      const std::vector<double> peaks = spectral::frf_peaks(*frf);
+      probe_json["frf"] = {{"file", "frf_" + probe.name + ".csv"},
+                           {"unit", "m/N"},
+                           {"force_direction", axis_name(excitation->direction)},
+                           {"resolution_hz", frf->resolution_hz},
+                           {"f_max_hz", frf->frequency_hz.empty() ? 0.0 : frf->frequency_hz.back()},
+                           {"peaks_hz", peaks}};
+      out << "frf " << probe.name << ": " << frf->frequency_hz.size() << " bins of " << std::setprecision(4)
+          << frf->resolution_hz << " Hz, peaks at";
+      for (double peak : peaks) out << " " << std::setprecision(6) << peak;
+      out << " Hz\n";
+    }
+    if (spectrum.plots) {
+      plot.title = probe.name + " u_" + axis;
+      const auto history_plot = spectral::plot_time_history(directory / ("history_" + probe.name + ".png"), values, sampling, plot);
+      spectral::plot_ringdown_envelope(directory / ("ringdown_" + probe.name + ".png"), analysis, plot);
+      if (frf) {
+        std::vector<double> reference;
+        const modal::VariantResult* variant = modes ? modes->find(setup.variant) : nullptr;
+        if (variant) {
+          for (int i = 0; i < variant->modes.n_modes(); ++i) reference.push_back(variant->modes.frequencies_hz[i]);
+        }
+        spectral::PlotOptions frf_plot = plot;
+        frf_plot.title = probe.name + ": H = u_" + axis + " / F_" + axis_name(excitation->direction);
+        frf_plot.unit = "m/N";
+        spectral::plot_frf(directory / ("frf_" + probe.name + ".png"), *frf, reference, frf_plot);
+      }
+      if (!history_plot.written) out << "note: no plots (" << history_plot.note << ")\n";
+    }
+    probes_json[probe.name] = probe_json;
+  }
+  nlohmann::json spectrum_json = {
+      {"excitation_hz", 0.0},
+      {"excitation", pulse ? "pulse" : (excitation ? excitation->kind : "none")},
+      {"amplitude_convention", "ringdown: peak amplitudes A_k of the orders k f of the dominant frequency f, "
+                               "the fitted decay removed (amplitudes at the analysis start time)"},
+      {"probes", probes_json}};
+  if (setup.release) spectrum_json["release"] = setup.release->kind;
+  io::write_json(directory / "spectrum.json", spectrum_json);
+}
+
 /// Displacement snapshots (VTU) at evenly spaced steps of a run, only when asked.
 class SnapshotWriter {
  public:
@@ -377,7 +540,7 @@ std::unique_ptr<transient::TransientSolver> run_transient_stage(const scene::Sce
                                                                 std::optional<SpectrumMonitor>& spectrum) {
   const scene::TransientSection& section = *scene.transient;
   auto solver = std::make_unique<transient::TransientSolver>(model.system(setup.variant), setup.problem, setup.settings);
-  if (scene.spectrum) spectrum.emplace(scene, setup.frequency, solver->dt());
+  if (scene.spectrum && setup.frequency > 0.0) spectrum.emplace(scene, setup.frequency, solver->dt());
   SnapshotWriter snapshots(directory, model, solver->dofs(), section.snapshots, solver->n_steps());
   transient::TransientCallbacks callbacks;
   callbacks.on_step = [&](const transient::StepView& view) {
@@ -432,6 +595,15 @@ void run_run_command(const RunCommandOptions& options, std::ostream& out) {
   const transient::TransientSummary& summary = solver->summary();
   transient_stage.seconds = transient_clock.seconds();
   stages.push_back(transient_stage);
+  if (setup.release) {
+    out << "release (" << setup.release->kind << "): largest displacement " << setup.release->largest_displacement
+        << " m";
+    if (setup.release->n_pairs > 0) {
+      out << ", " << setup.release->n_closed << " of " << setup.release->n_pairs << " crack pairs closed after "
+          << setup.release->iterations << " active-set iterations";
+    }
+    out << "\n";
+  }
   out << "transient: " << summary.steps << " steps of " << summary.dt << " s (dt_critical " << summary.dt_critical
       << " s), " << summary.status << ", energy error " << summary.energy_error << ", " << std::setprecision(3)
       << summary.wall_s << " s\n";
@@ -442,6 +614,12 @@ void run_run_command(const RunCommandOptions& options, std::ostream& out) {
     spectrum_stage.ran = true;
     spectrum_stage.reason = "the scene has a spectrum: section";
     spectrum->write(scene, directory, solver->probes(), solver->dt(), out);
+    spectrum_stage.seconds = clock.seconds();
+  } else if (scene.spectrum) {
+    Stopwatch clock;
+    spectrum_stage.ran = true;
+    spectrum_stage.reason = "the scene has a spectrum: section; no harmonic excitation: ring-down analysis";
+    write_ringdown_spectrum(scene, directory, solver->probes(), setup, modes, out);
     spectrum_stage.seconds = clock.seconds();
   }
   stages.push_back(spectrum_stage);

@@ -118,6 +118,9 @@ Param build_parameters() {
       number("gap", "Initial normal gap g0 (MODEL.md eq. 9): > 0 open, < 0 pre-compressed.").with_unit("m")
           .defaults_to("0"),
       map_of("contact", "Penalty contact between the crack faces in transient runs (MODEL.md eq. 25d, 15).", {
+        choice("model", "penalty: the crack faces touch (penalty springs, a breathing crack); none: no contact, "
+                        "the faces pass through each other (the open body, a linear run at the open "
+                        "frequencies).", {"penalty", "none"}).defaults_to("penalty"),
         number("penalty", "Normal penalty eps_N (force per unit area per unit penetration); auto: from E and "
                           "the element size normal to the crack.").with_unit("Pa/m").above(0).or_word("auto")
             .defaults_to("auto"),
@@ -146,8 +149,10 @@ Param build_parameters() {
         text("group", "Loaded node set of a Gmsh mesh."),
         number("point", "Loaded point: the force acts on the nearest node.").with_unit("m").list(3),
         choice("direction", "Direction of the force.", kAxes).defaults_to("z"),
-        number("amplitude", "Total force amplitude.").with_unit("N").above(0).required(),
-        choice("kind", "harmonic: sin(2 pi f t) ramped in; pulse: one half-sine of the given duration.",
+        number("amplitude", "Total force amplitude (the peak force of a pulse).").with_unit("N").above(0).required(),
+        choice("kind", "harmonic: sin(2 pi f t) ramped in; pulse: an impact-hammer blow, one half-sine of the "
+                       "given duration and peak `amplitude` from t = 0 (its spectrum falls to a third of its "
+                       "static value at 1/duration; the spectrum stage writes the FRF H = X/F up to there).",
                {"harmonic", "pulse"}).defaults_to("harmonic"),
         map_of("frequency", "Excitation frequency: a value in Hz, or relative to a mode.", {
           number("hz", "Frequency in Hz.").with_unit("Hz").above(0),
@@ -193,6 +198,25 @@ Param build_parameters() {
         choice("component", "Component of the displacement analysed by the spectrum (default: the excitation "
                             "direction); its unit is that of the harmonic amplitudes.", kAxes).with_unit("m"),
       }).defaults_to("[]"),
+      map_of("release", "Free vibration: the run starts at rest from a deflected state (MODEL.md eq. 6), given "
+                        "by exactly one of static and mode; added to `initial`.", {
+        map_of("static", "The static deflection under a load, with the crack's contact active (the nonlinear "
+                         "static problem: a crack pressed shut or pulled open starts from its true state); the "
+                         "load is removed at t = 0.", {
+          choice("face", "Loaded face of the box (uniform traction of the given total).", {faces.begin(), faces.end()}),
+          text("group", "Loaded node set of a Gmsh mesh."),
+          number("point", "Loaded point: the force acts on the nearest node.").with_unit("m").list(3),
+          choice("direction", "Direction of the force.", kAxes).defaults_to("z"),
+          number("amplitude", "Total static force.").with_unit("N").above(0).required(),
+        }).optional_section(),
+        map_of("mode", "A mode shape of one linear limit (the modal stage runs for that variant).", {
+          integer("number", "Elastic mode number (1 = lowest).").at_least(1).required(),
+          choice("variant", "Which linear limit's mode: faces tied (uncracked) or free (open).",
+                 {"uncracked", "open"}).defaults_to("uncracked"),
+          number("amplitude", "Largest nodal displacement of the scaled mode shape.").with_unit("m").above(0)
+              .required(),
+        }).optional_section(),
+      }).optional_section(),
       list_of("initial", "Initial velocity and displacement (MODEL.md eq. 6), uniform over the nodes in a "
                          "coordinate range (all nodes when no range is given).", {
         number("velocity", "Initial velocity.").with_unit("m/s").list(3).defaults_to("[0, 0, 0]"),
@@ -216,6 +240,14 @@ Param build_parameters() {
         integer("min_periods", "Periods run before the check starts.").at_least(1).defaults_to("20"),
         integer("window_periods", "Periods per analysis window (made even for sub-harmonics).").at_least(1)
             .defaults_to("10"),
+      }),
+      map_of("ringdown", "Ring-down analysis, run instead of the harmonic table when the excitation is not "
+                         "harmonic (free vibration, a pulse, or none): dominant frequency, damping ratio and "
+                         "orders of it.", {
+        number("start", "Analysis start time; auto: 0, or the end of a pulse.").with_unit("s").at_least(0)
+            .or_word("auto").defaults_to("auto"),
+        integer("window_periods", "Periods of the dominant frequency per envelope window (made even for "
+                                  "sub-harmonics).").at_least(1).defaults_to("4"),
       }),
       choice("window", "auto: integer-period rectangular window when the sampling allows, else resampled or "
                        "Hann.", {"auto", "rectangular", "hann", "flattop"}).defaults_to("auto"),
@@ -471,6 +503,27 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
     }
     transient.probes.push_back(probe);
   }
+  if (values.has("transient.release")) {
+    ReleaseSection release;
+    release.kind = exactly_one(values, "transient.release", {"static", "mode"});
+    if (release.kind == "static") {
+      const std::string load = "transient.release.static";
+      const std::string where = exactly_one(values, load, {"face", "group", "point"});
+      if (where == "face") release.face = values.word(load + ".face");
+      if (where == "group") release.group = values.word(load + ".group");
+      if (where == "point") release.point = vec3(values.numbers(load + ".point"));
+      release.direction = axis_index(values.word(load + ".direction"));
+      release.amplitude = values.number(load + ".amplitude");
+    } else {
+      release.mode = values.integer("transient.release.mode.number");
+      release.variant = values.word("transient.release.mode.variant");
+      release.amplitude = values.number("transient.release.mode.amplitude");
+      if (release.variant == "open" && !scene.has_crack()) {
+        values.fail("transient.release.mode.variant", "uncracked (the scene has no crack)", "'open'");
+      }
+    }
+    transient.release = release;
+  }
   for (int i = 0; i < values.count("transient.initial"); ++i) {
     const std::string entry = "transient.initial[" + std::to_string(i) + "]";
     InitialSection initial;
@@ -494,9 +547,7 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
 }
 
 SpectrumSection spectrum_from(const Values& values, const Scene& scene) {
-  if (!scene.transient || !scene.transient->excitation || scene.transient->excitation->kind != "harmonic") {
-    values.fail("spectrum", "a transient section with a harmonic excitation to analyse", "none");
-  }
+  if (!scene.transient) values.fail("spectrum", "a transient section to analyse", "none");
   if (scene.transient->probes.empty()) values.fail("transient.probes", "at least one probe for the spectrum", "none");
   SpectrumSection spectrum;
   spectrum.harmonics = values.integer("spectrum.harmonics");
@@ -505,6 +556,8 @@ SpectrumSection spectrum_from(const Values& values, const Scene& scene) {
   spectrum.min_periods = values.integer("spectrum.steady_state.min_periods");
   spectrum.window_periods = values.integer("spectrum.steady_state.window_periods");
   spectrum.window = values.word("spectrum.window");
+  spectrum.ringdown_start = optional_number(values, "spectrum.ringdown.start");
+  spectrum.ringdown_window_periods = values.integer("spectrum.ringdown.window_periods");
   spectrum.plots = values.flag("spectrum.plots");
   return spectrum;
 }
@@ -602,6 +655,7 @@ Scene scene_from(const Values& values) {
     scene.contact.penalty = optional_number(values, "crack.contact.penalty");
     scene.contact.friction = values.number("crack.contact.friction");
     scene.contact.integration = values.word("crack.contact.integration");
+    scene.contact.model = values.word("crack.contact.model");
   }
   if (values.has("transient")) scene.transient = transient_from(values, scene);
   if (values.has("spectrum")) scene.spectrum = spectrum_from(values, scene);

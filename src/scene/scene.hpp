@@ -75,6 +75,7 @@ struct ContactSection {
   std::optional<double> penalty;  ///< eps_N [Pa/m]; empty: auto
   double friction = 0.0;          ///< Coulomb mu
   std::string integration = "implicit";  ///< implicit | explicit
+  std::string model = "penalty";         ///< penalty | none (no contact: the faces pass through)
 };
 
 /// `transient.excitation`.
@@ -115,6 +116,18 @@ struct InitialSection {
   std::array<std::optional<std::array<double, 2>>, 3> range;  ///< per axis [m]; none: everywhere
 };
 
+/// `transient.release`: the run starts at rest from a static deflection or a mode shape.
+struct ReleaseSection {
+  std::string kind;           ///< static | mode
+  std::string face;           ///< static: box face, or empty
+  std::string group;          ///< static: mesh group, or empty
+  std::optional<Vec3> point;  ///< static: nearest node, or empty
+  int direction = 2;          ///< static: 0, 1, 2 for x, y, z
+  double amplitude = 0.0;     ///< static: total force [N]; mode: largest nodal displacement [m]
+  int mode = 0;               ///< mode: elastic mode number (1-based)
+  std::string variant = "uncracked";  ///< mode: uncracked | open
+};
+
 /// `transient:` (issue 4).
 struct TransientSection {
   std::optional<ExcitationSection> excitation;
@@ -127,6 +140,7 @@ struct TransientSection {
   std::string variant = "open";
   std::vector<ProbeSection> probes;
   std::vector<InitialSection> initial;
+  std::optional<ReleaseSection> release;
   int snapshots = 0;
   bool progress = true;
 };
@@ -140,6 +154,8 @@ struct SpectrumSection {
   int window_periods = 10;
   std::string window = "auto";
   bool plots = true;
+  std::optional<double> ringdown_start;  ///< [s]; empty: auto (0, or the end of a pulse)
+  int ringdown_window_periods = 4;
 };
 
 struct Scene {

@@ -184,4 +184,47 @@ PlotResult plot_spectrum(const fs::path& png, const AmplitudeSpectrum& spectrum,
   return draw(png, data, body, options);
 }
 
+PlotResult plot_ringdown_envelope(const fs::path& png, const RingdownAnalysis& analysis,
+                                  const PlotOptions& options) {
+  std::string data = "# window centre time [s], then the amplitude [" + options.unit + "] of the orders";
+  for (const RingdownHarmonic& harmonic : analysis.harmonics) data += " " + order_label(harmonic.order);
+  data += "\n";
+  for (const EnvelopeWindow& window : analysis.envelope) {
+    data += number_text(0.5 * (window.start_time + window.end_time));
+    for (double amplitude : window.amplitude) {
+      data += ' ';
+      data += number_text(std::abs(amplitude));
+    }
+    data += '\n';
+  }
+  std::string body = "set logscale y\nset xlabel 'time [s]'\nset ylabel " +
+                     gnuplot_quote("amplitude [" + options.unit + "]") + "\nset key outside right\nplot ";
+  const std::string file = gnuplot_quote(fs::path(png).replace_extension(".dat").filename().string());
+  for (std::size_t k = 0; k < analysis.harmonics.size(); ++k) {
+    body += (k ? ", " : "") + file + " using 1:($" + std::to_string(k + 2) + " > 0 ? $" + std::to_string(k + 2) +
+            " : NaN) with linespoints linewidth 1.5 pointtype 7 pointsize 0.6 title " +
+            gnuplot_quote(order_label(analysis.harmonics[k].order) + " f");
+  }
+  body += "\n";
+  return draw(png, data, body, options);
+}
+
+PlotResult plot_frf(const fs::path& png, const FrequencyResponse& frf, const std::vector<double>& reference_hz,
+                    const PlotOptions& options) {
+  std::string data = "# frequency [Hz]  |H| [" + options.unit + "]  arg H [rad]\n";
+  for (std::size_t k = 0; k < frf.frequency_hz.size(); ++k) {
+    data += number_text(frf.frequency_hz[k]) + ' ' + number_text(frf.magnitude[k]) + ' ' +
+            number_text(frf.phase_rad[k]) + '\n';
+  }
+  std::string body = "set logscale y\nset xlabel 'frequency [Hz]'\nset ylabel " +
+                     gnuplot_quote("|H| [" + options.unit + "]") + "\n";
+  for (double f : reference_hz) {
+    const std::string x = number_text(f);
+    body += "set arrow from " + x + ", graph 0 to " + x + ", graph 1 nohead dashtype 2 linecolor rgb 'gray50'\n";
+  }
+  body += "plot " + gnuplot_quote(fs::path(png).replace_extension(".dat").filename().string()) +
+          " using 1:($2 > 0 ? $2 : NaN) with lines linewidth 1.5 notitle\n";
+  return draw(png, data, body, options);
+}
+
 }  // namespace crackle::spectral

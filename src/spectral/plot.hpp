@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "spectral/harmonics.hpp"
+#include "spectral/ringdown.hpp"
 #include "spectral/spectrum.hpp"
 
 namespace crackle::spectral {
@@ -49,5 +50,17 @@ PlotResult plot_time_history(const std::filesystem::path& png, const std::vector
 PlotResult plot_spectrum(const std::filesystem::path& png, const AmplitudeSpectrum& spectrum,
                          double excitation_frequency_hz, const std::vector<double>& orders,
                          const PlotOptions& options);
+
+/// (c) Ring-down envelope: the amplitude of every order of a ring-down analysis against the centre
+/// time of its envelope window, on a log y-scale (an exponential decay is a straight line), one
+/// line per order labelled "1/2", "1", "2", ...
+PlotResult plot_ringdown_envelope(const std::filesystem::path& png, const RingdownAnalysis& analysis,
+                                  const PlotOptions& options);
+
+/// (d) Frequency-response magnitude |H(f)| on a log y-scale, with dashed vertical lines at the
+/// given reference frequencies [Hz] (modal frequencies; none when empty). `options.unit` is the
+/// unit of H (e.g. "m/N").
+PlotResult plot_frf(const std::filesystem::path& png, const FrequencyResponse& frf,
+                    const std::vector<double>& reference_hz, const PlotOptions& options);
 
 }  // namespace crackle::spectral
