@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include "cli_testing.hpp"
+
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -10,24 +12,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int exit_code = -1;
-  std::string output;  ///< stdout and stderr together
-};
-
-/// Runs the crackle executable with the given arguments.
-Result crackle(const std::string& arguments) {
-  const std::string command = std::string(CRACKLE_BINARY_DIR) + "/apps/crackle " + arguments + " 2>&1";
-  Result result;
-  FILE* pipe = popen(command.c_str(), "r");
-  std::array<char, 4096> buffer;
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) result.output += buffer.data();
-  const int status = pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
-
-std::string data(const std::string& name) { return std::string(CRACKLE_SOURCE_DIR) + "/data/" + name; }
+using cli_testing::crackle;
+using cli_testing::data;
+using cli_testing::Result;
 
 }  // namespace
 

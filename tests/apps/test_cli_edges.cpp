@@ -4,6 +4,8 @@
 // refuses to run as several MPI ranks.
 #include <gtest/gtest.h>
 
+#include "cli_testing.hpp"
+
 #include <array>
 #include <cstdio>
 #include <cstdlib>
@@ -15,24 +17,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int exit_code = -1;
-  std::string output;  ///< stdout and stderr together
-};
-
-Result crackle(const std::string& arguments, const std::string& environment = "") {
-  const std::string command =
-      environment + " " + std::string(CRACKLE_BINARY_DIR) + "/apps/crackle " + arguments + " 2>&1";
-  Result result;
-  FILE* pipe = popen(command.c_str(), "r");
-  std::array<char, 4096> buffer;
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) result.output += buffer.data();
-  const int status = pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
-
-std::string data(const std::string& name) { return std::string(CRACKLE_SOURCE_DIR) + "/data/" + name; }
+using cli_testing::crackle;
+using cli_testing::data;
+using cli_testing::Result;
 
 /// A two-mode cantilever that solves in a blink.
 fs::path small_scene() {

@@ -3,6 +3,8 @@
 // frequencies of the same mesh (lumped mass, as the transient), and the FRF of an impact.
 #include <gtest/gtest.h>
 
+#include "cli_testing.hpp"
+
 #include <Eigen/SparseCholesky>
 #include <array>
 #include <cmath>
@@ -47,15 +49,9 @@ fs::path scratch() {
 int crackle_run(const std::string& name, const std::string& scene_text, std::string* output) {
   const fs::path scene = scratch() / (name + ".yaml");
   std::ofstream(scene) << scene_text;
-  const std::string command = std::string(CRACKLE_BINARY_DIR) + "/apps/crackle run " + scene.string() + " -o " +
-                              (scratch() / name).string() + " -q 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::array<char, 4096> buffer;
-  std::string text;
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) text += buffer.data();
-  const int status = pclose(pipe);
-  *output = text;
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const cli_testing::Result result = cli_testing::crackle("run " + scene.string() + " -o " + (scratch() / name).string() + " -q");
+  *output = result.output;
+  return result.exit_code;
 }
 
 nlohmann::json read_json(const fs::path& path) {

@@ -1,6 +1,8 @@
 // End-to-end tests of `crackle run` (modal -> transient -> spectrum) on a small cracked cantilever.
 #include <gtest/gtest.h>
 
+#include "cli_testing.hpp"
+
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -48,15 +50,10 @@ fs::path scratch() {
 int crackle_run(const std::string& name, const std::string& overrides, std::string* output = nullptr) {
   const fs::path scene = scratch() / "small.yaml";
   if (!fs::exists(scene)) std::ofstream(scene) << kScene;
-  const std::string command = std::string(CRACKLE_BINARY_DIR) + "/apps/crackle run " + scene.string() + " -o " +
-                              (scratch() / name).string() + " -q " + overrides + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::array<char, 4096> buffer;
-  std::string text;
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) text += buffer.data();
-  const int status = pclose(pipe);
-  if (output) *output = text;
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const cli_testing::Result result =
+      cli_testing::crackle("run " + scene.string() + " -o " + (scratch() / name).string() + " -q " + overrides);
+  if (output) *output = result.output;
+  return result.exit_code;
 }
 
 nlohmann::json read_json(const fs::path& path) {
@@ -151,15 +148,11 @@ TEST(Run, SceneWithoutTransientIsAClearError) {
 /// of the delaminated ply took open places 5 and 7): a frequency relative to its bilinear
 /// frequency is refused instead of taken from a mismatched pair.
 TEST(Run, BilinearFrequencyOfAnUnpairedModeIsAClearError) {
-  const std::string command = std::string(CRACKLE_BINARY_DIR) + "/apps/crackle run " + CRACKLE_SOURCE_DIR +
-                              "/data/composite-plate.yaml -o " + (scratch() / "unpaired").string() +
-                              " -q --set modal.modes=8 --set transient.excitation.frequency.mode=7 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::array<char, 4096> buffer;
-  std::string text;
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) text += buffer.data();
-  const int status = pclose(pipe);
-  EXPECT_EQ(WEXITSTATUS(status), 2) << text;
+  const cli_testing::Result result =
+      cli_testing::crackle("run " + cli_testing::data("composite-plate.yaml") + " -o " + (scratch() / "unpaired").string() +
+                           " -q --set modal.modes=8 --set transient.excitation.frequency.mode=7");
+  const std::string& text = result.output;
+  EXPECT_EQ(result.exit_code, 2) << text;
   EXPECT_NE(text.find("transient.excitation.frequency.mode: mode 7 has no open partner among the 8 open modes "
                       "computed"),
             std::string::npos)
