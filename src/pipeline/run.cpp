@@ -13,6 +13,7 @@
 #include "io/files.hpp"
 #include "io/vtu.hpp"
 #include "pipeline/model.hpp"
+#include "pipeline/stages.hpp"
 #include "modal/modal.hpp"
 #include "spectral/harmonics.hpp"
 #include "spectral/plot.hpp"
@@ -28,14 +29,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// One line of run.json: a stage, whether it ran, why, and its time.
-struct Stage {
-  std::string name;
-  bool ran = false;
-  std::string reason;
-  double seconds = 0.0;
-};
-
 /// The modal variants the scene needs (empty: no modal stage).
 std::vector<mesh::Variant> needed_variants(const scene::Scene& scene, std::string& reason) {
   std::set<mesh::Variant> variants;
@@ -50,6 +43,14 @@ std::vector<mesh::Variant> needed_variants(const scene::Scene& scene, std::strin
     variants.insert(mesh::Variant::uncracked);
     if (reason.empty()) reason = "transient.damping.at refers to mode " + std::to_string(transient.damping.at_mode);
   }
+  if (scene.sweep) {
+    for (const scene::SweepFrequencySection* end : {&scene.sweep->from, &scene.sweep->to}) {
+      if (end->mode == 0) continue;
+      if (end->of != "open") variants.insert(mesh::Variant::uncracked);
+      if (end->of != "uncracked") variants.insert(mesh::Variant::open);
+      if (reason.empty()) reason = "sweep.frequency refers to mode " + std::to_string(end->mode);
+    }
+  }
   if (scene.has_modal_section) {
     for (const std::string& name : scene.modal.variants) {
       variants.insert(name == "open" ? mesh::Variant::open : mesh::Variant::uncracked);
@@ -62,32 +63,6 @@ std::vector<mesh::Variant> needed_variants(const scene::Scene& scene, std::strin
     if (variants.count(variant)) ordered.push_back(variant);
   }
   return ordered;
-}
-
-/// Frequency [Hz] of elastic mode `mode` (1-based) of the given kind from a modal result.
-double mode_frequency(const modal::ModalResult& result, int mode, const std::string& of, const std::string& key) {
-  const int index = mode - 1;
-  if (of == "bilinear") {
-    if (index >= static_cast<int>(result.pairs.size())) {
-      throw InputError(key + ": mode " + std::to_string(mode) + " asked, but only " +
-                       std::to_string(result.pairs.size()) + " modes were paired (raise modal.modes)");
-    }
-    const modal::ModePair& pair = result.pairs[index];
-    if (!pair.paired) {
-      throw InputError(key + ": mode " + std::to_string(mode) + " has no open partner among the " +
-                       std::to_string(result.mac.cols()) + " open modes computed (best MAC " +
-                       format_number(pair.mac) + " < " + format_number(modal::kPairingMac) +
-                       "), so its bilinear frequency is undefined (raise modal.modes)");
-    }
-    return pair.f_bilinear_hz;
-  }
-  const modal::VariantResult* variant =
-      result.find(of == "open" ? mesh::Variant::open : mesh::Variant::uncracked);
-  if (!variant || index >= variant->modes.n_modes()) {
-    throw InputError(key + ": mode " + std::to_string(mode) + " of the " + of + " body asked, but only " +
-                     std::to_string(variant ? variant->modes.n_modes() : 0) + " modes were computed");
-  }
-  return variant->modes.frequencies_hz[index];
 }
 
 std::vector<Index> nodes_in_range(const mesh::Mesh& mesh, const scene::InitialSection& initial) {
@@ -111,31 +86,6 @@ struct ProbeSpectrum {
   std::unique_ptr<spectral::HarmonicAccumulator> accumulator;
 };
 
-
-/// Stage 1: the modes, only if something needs them (or the scene asks for them).
-std::optional<modal::ModalResult> run_modal_stage(const scene::Scene& scene, const Model& model,
-                                                  const RunCommandOptions& options, Stage& stage, std::ostream& out) {
-  const std::vector<mesh::Variant> variants = needed_variants(scene, stage.reason);
-  if (variants.empty()) {
-    stage.reason = "nothing refers to a mode";
-    return std::nullopt;
-  }
-  const scene::TransientSection& section = *scene.transient;
-  Stopwatch clock;
-  modal::ModalOptions modal_settings = modal_options(scene.modal);
-  modal_settings.variants = variants;
-  int highest = scene.has_modal_section ? scene.modal.modes : 1;
-  if (section.excitation) highest = std::max(highest, section.excitation->mode);
-  modal_settings.modes = std::max(highest, section.damping.at_mode);
-  modal_settings.cache_directory = options.modal_cache;
-  modal::ModalResult modes = modal::run_modal(
-      [&model](mesh::Variant variant) -> const fem::System& { return *model.system(variant); }, modal_settings);
-  modal::write_modal_outputs(options.output_directory, model.mesh, modes);
-  stage.ran = true;
-  stage.seconds = clock.seconds();
-  out << modal::modal_table(modes);
-  return modes;
-}
 
 /// The transient stage's inputs, from the scene and the modes.
 struct TransientSetup {
@@ -408,6 +358,58 @@ void write_run_json(const scene::Scene& scene, const fs::path& directory, const 
 
 }  // namespace
 
+/// Frequency [Hz] of elastic mode `mode` (1-based) of the given kind from a modal result.
+double mode_frequency(const modal::ModalResult& result, int mode, const std::string& of, const std::string& key) {
+  const int index = mode - 1;
+  if (of == "bilinear") {
+    if (index >= static_cast<int>(result.pairs.size())) {
+      throw InputError(key + ": mode " + std::to_string(mode) + " asked, but only " +
+                       std::to_string(result.pairs.size()) + " modes were paired (raise modal.modes)");
+    }
+    const modal::ModePair& pair = result.pairs[index];
+    if (!pair.paired) {
+      throw InputError(key + ": mode " + std::to_string(mode) + " has no open partner among the " +
+                       std::to_string(result.mac.cols()) + " open modes computed (best MAC " +
+                       format_number(pair.mac) + " < " + format_number(modal::kPairingMac) +
+                       "), so its bilinear frequency is undefined (raise modal.modes)");
+    }
+    return pair.f_bilinear_hz;
+  }
+  const modal::VariantResult* variant =
+      result.find(of == "open" ? mesh::Variant::open : mesh::Variant::uncracked);
+  if (!variant || index >= variant->modes.n_modes()) {
+    throw InputError(key + ": mode " + std::to_string(mode) + " of the " + of + " body asked, but only " +
+                     std::to_string(variant ? variant->modes.n_modes() : 0) + " modes were computed");
+  }
+  return variant->modes.frequencies_hz[index];
+}
+
+std::optional<modal::ModalResult> run_modal_stage(const scene::Scene& scene, const Model& model,
+                                                  const fs::path& output_directory, const fs::path& modal_cache,
+                                                  Stage& stage, std::ostream& out) {
+  const std::vector<mesh::Variant> variants = needed_variants(scene, stage.reason);
+  if (variants.empty()) {
+    stage.reason = "nothing refers to a mode";
+    return std::nullopt;
+  }
+  const scene::TransientSection& section = *scene.transient;
+  Stopwatch clock;
+  modal::ModalOptions modal_settings = modal_options(scene.modal);
+  modal_settings.variants = variants;
+  int highest = scene.has_modal_section ? scene.modal.modes : 1;
+  if (section.excitation) highest = std::max(highest, section.excitation->mode);
+  if (scene.sweep) highest = std::max({highest, scene.sweep->from.mode, scene.sweep->to.mode});
+  modal_settings.modes = std::max(highest, section.damping.at_mode);
+  modal_settings.cache_directory = modal_cache;
+  modal::ModalResult modes = modal::run_modal(
+      [&model](mesh::Variant variant) -> const fem::System& { return *model.system(variant); }, modal_settings);
+  modal::write_modal_outputs(output_directory, model.mesh, modes);
+  stage.ran = true;
+  stage.seconds = clock.seconds();
+  out << modal::modal_table(modes);
+  return modes;
+}
+
 void run_run_command(const RunCommandOptions& options, std::ostream& out) {
   Stopwatch total;
   const scene::Scene scene = scene::load_scene(options.scene_path, parse_overrides(options.overrides));
@@ -421,7 +423,7 @@ void run_run_command(const RunCommandOptions& options, std::ostream& out) {
   std::vector<Stage> stages;
 
   Stage modal_stage{"modal", false, "", 0.0};
-  const std::optional<modal::ModalResult> modes = run_modal_stage(scene, model, options, modal_stage, out);
+  const std::optional<modal::ModalResult> modes = run_modal_stage(scene, model, directory, options.modal_cache, modal_stage, out);
   stages.push_back(modal_stage);
 
   Stage transient_stage{"transient", true, "the scene has a transient: section"};

@@ -50,4 +50,9 @@ PlotResult plot_spectrum(const std::filesystem::path& png, const AmplitudeSpectr
                          double excitation_frequency_hz, const std::vector<double>& orders,
                          const PlotOptions& options);
 
+/// Any plot: writes `data` as `<name>.dat` and a script of `script_body` (after the terminal,
+/// output, title and grid lines) as `<name>.gp`, and runs gnuplot in the PNG's folder.
+PlotResult plot_script(const std::filesystem::path& png, const std::string& data, const std::string& script_body,
+                       const PlotOptions& options);
+
 }  // namespace crackle::spectral
