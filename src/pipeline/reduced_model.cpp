@@ -94,6 +94,14 @@ ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, 
   else if (const std::optional<Index> up_to = reduction->modes_up_to(options.max_frequency_hz)) modes = *up_to;
   const double amplitude = section.excitation ? section.excitation->amplitude : 0.0;
   result.system = reduced::reduced_system(*reduction, modes, amplitude);
+  if (!section.reduced.residual_flexibility) {
+    // Modes only: pairs and outputs see no static correction (a massless boundary needs R > 0, so the
+    // pairs keep a tiny compliance of 1e-9 of their static one).
+    result.system.residual = 1e-9 * reduction->pair_static.diagonal().asDiagonal();
+    result.system.load_residual.setZero();
+    result.system.output_residual_pairs.setZero();
+    result.system.output_residual_load.setZero();
+  }
   if (with_crack) {
     const contact::PenaltyChoice penalty = contact::choose_penalty(model.mesh, model.materials, contact_options);
     result.system.normal_penalty = penalty.normal_penalty;

@@ -198,6 +198,8 @@ Param build_parameters() {
         integer("steps_per_period", "Time steps per period of the highest retained mode or of max_frequency, "
                                     "whichever is higher (average-acceleration Newmark: frequency error "
                                     "(2 pi / n)^2 / 12).").at_least(4).defaults_to("40"),
+        boolean("residual_flexibility", "Keep the static correction of the truncated modes (HYBRID.md sec. 2); "
+                                        "false only to measure what it brings.").defaults_to("true"),
       }),
       list_of("probes", "Points whose displacement, velocity and acceleration are recorded (nearest node).", {
         text("name", "Name of the probe: letters, digits, _ . - (column prefix, file names, spectrum.json key).")
@@ -478,6 +480,7 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
     transient.reduced.max_frequency_hz = values.number("transient.reduced.max_frequency");
   }
   transient.reduced.steps_per_period = values.integer("transient.reduced.steps_per_period");
+  transient.reduced.residual_flexibility = values.flag("transient.reduced.residual_flexibility");
   for (int i = 0; i < values.count("transient.probes"); ++i) {
     const std::string entry = "transient.probes[" + std::to_string(i) + "]";
     ProbeSection probe;

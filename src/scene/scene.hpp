@@ -120,6 +120,7 @@ struct ReducedSection {
   int modes = 0;                 ///< 0: auto (every mode up to max_frequency)
   double max_frequency_hz = 0.0; ///< 0: auto
   int steps_per_period = 40;
+  bool residual_flexibility = true;
 };
 
 struct TransientSection {
