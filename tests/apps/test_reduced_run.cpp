@@ -192,3 +192,30 @@ TEST(ReducedRun, UndampedChatteringKeepsItsEnergyBalance) {
   EXPECT_GT(transient["contact_fraction"].get<double>(), 0.05);
   EXPECT_LT(transient["contact_fraction"].get<double>(), 0.95);
 }
+
+TEST(ReducedRun, StudyOverExcitationFrequencyComputesTheReductionOnce) {
+  const fs::path scene = scratch() / "study.yaml";
+  std::string forced = kForced;
+  forced.replace(forced.find("periods: 40"), 11, "periods: 20\n  model: reduced");
+  std::ofstream(scene) << kBody << forced << R"(study:
+  vary:
+    transient.excitation.frequency: [140, 150, 160]
+  outputs: [spectrum]
+)";
+  const fs::path output = scratch() / "study";
+  std::string log;
+  const int status = run_command(std::string(CRACKLE_BINARY_DIR) + "/apps/crackle study " + scene.string() + " -o " +
+                                     output.string() + " -j 1",
+                                 &log);
+  ASSERT_EQ(status, 0) << log;
+  int computed = 0, cached = 0;
+  for (const auto& entry : fs::directory_iterator(output / "cases")) {
+    const fs::path file = entry.path() / "transient.json";
+    if (!fs::exists(file)) continue;
+    const nlohmann::json transient = read_json(file);
+    EXPECT_EQ(transient["model"], "reduced");
+    (transient["reduction_cached"].get<bool>() ? cached : computed) += 1;
+  }
+  EXPECT_EQ(computed, 1);
+  EXPECT_EQ(cached, 2);
+}
