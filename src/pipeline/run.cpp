@@ -13,7 +13,9 @@
 #include "io/files.hpp"
 #include "io/vtu.hpp"
 #include "pipeline/model.hpp"
+#include "pipeline/reduced_model.hpp"
 #include "pipeline/stages.hpp"
+#include "reduced/integrator.hpp"
 #include "modal/modal.hpp"
 #include "spectral/harmonics.hpp"
 #include "spectral/plot.hpp"
@@ -121,6 +123,8 @@ transient::ExternalLoad excitation_load(const scene::Scene& scene, const Model& 
   return load;
 }
 
+}  // namespace
+
 /// Rayleigh damping from a ratio at a frequency (or a mode), or from alpha and beta.
 transient::RayleighDamping scene_damping(const scene::Scene& scene, const std::optional<modal::ModalResult>& modes) {
   const scene::DampingSection& damping = scene.transient->damping;
@@ -133,16 +137,7 @@ transient::RayleighDamping scene_damping(const scene::Scene& scene, const std::o
                                      : transient::mass_proportional_damping(*damping.ratio, omega);
 }
 
-/// The crack contact of the scene's `crack.contact`.
-contact::ContactOptions scene_contact(const scene::Scene& scene) {
-  contact::ContactOptions contact;
-  contact.initial_gap = scene.crack ? scene.crack->gap : (scene.crack_group ? scene.crack_group->gap : 0.0);
-  contact.normal_penalty = scene.contact.penalty.value_or(0.0);
-  contact.friction_coefficient = scene.contact.friction;
-  contact.integration = scene.contact.integration == "explicit" ? contact::ContactIntegration::explicit_forces
-                                                                : contact::ContactIntegration::implicit;
-  return contact;
-}
+namespace {
 
 /// Initial fields (uniform per coordinate box) over the run's DOFs.
 void add_initial_fields(const scene::TransientSection& section, const Model& model, const mesh::DofMap& dofs,
@@ -167,7 +162,7 @@ TransientSetup transient_setup(const scene::Scene& scene, const Model& model,
   settings.variant = setup.variant;
   const fem::System& system = *model.system(setup.variant);
   if (setup.variant == mesh::Variant::open && model.mesh.has_crack()) {
-    setup.contact = std::make_shared<contact::ContactForce>(model.mesh, system.dofs(), model.materials, scene_contact(scene));
+    setup.contact = std::make_shared<contact::ContactForce>(model.mesh, system.dofs(), model.materials, scene_contact_options(scene));
     setup.problem.terms.push_back(setup.contact);
   }
   add_initial_fields(section, model, system.dofs(), setup.problem.initial);
@@ -343,6 +338,168 @@ std::unique_ptr<transient::TransientSolver> run_transient_stage(const scene::Sce
   return solver;
 }
 
+/// Probe and energy records of the reduced transient, in the full transient's CSV layout.
+struct ReducedRecords {
+  transient::ProbeHistory probes;
+  transient::EnergyHistory energy;
+  std::vector<double> sample;   ///< 9 per probe: u, v, a (x, y, z each)
+  VectorX previous_residual;    ///< residual (massless) part of the outputs at the previous sample
+  VectorX previous_residual_rate;
+};
+
+/// The probe sample of the integrator's state: the modal part of v and a exactly, the massless
+/// residual part (C G_res (B^T p + f a)) by differences of successive samples.
+void reduced_sample(const reduced::ReducedIntegrator& integrator, const reduced::ReducedSystem& system, double h,
+                    ReducedRecords& records) {
+  const VectorX outputs = integrator.outputs();
+  const VectorX modal = system.output_modes * integrator.modal_displacement();
+  const VectorX residual = outputs - modal;
+  const bool first = records.previous_residual.size() == 0;
+  const VectorX rate = first ? VectorX::Zero(residual.size()).eval() : ((residual - records.previous_residual) / h).eval();
+  const VectorX rate_change = first ? VectorX::Zero(residual.size()).eval()
+                                    : ((rate - records.previous_residual_rate) / h).eval();
+  const VectorX velocity = system.output_modes * integrator.modal_velocity() + rate;
+  const VectorX acceleration = system.output_modes * integrator.modal_acceleration() + rate_change;
+  records.sample.assign(3 * static_cast<std::size_t>(outputs.size()), 0.0);
+  for (Index row = 0; row < outputs.size(); ++row) {
+    const Index probe = row / 3, c = row % 3;
+    records.sample[9 * probe + c] = outputs[row];
+    records.sample[9 * probe + 3 + c] = velocity[row];
+    records.sample[9 * probe + 6 + c] = acceleration[row];
+  }
+  records.previous_residual = residual;
+  records.previous_residual_rate = rate;
+  records.probes.time.push_back(integrator.time());
+  for (std::size_t k = 0; k < records.sample.size(); ++k) records.probes.values[k].push_back(records.sample[k]);
+}
+
+void reduced_energy_row(const reduced::ReducedIntegrator& integrator, double initial_total, ReducedRecords& records) {
+  const reduced::ReducedEnergy& e = integrator.energy();
+  transient::EnergyHistory& history = records.energy;
+  history.time.push_back(integrator.time());
+  history.kinetic.push_back(e.kinetic);
+  history.strain.push_back(e.modal_strain + e.residual_strain);
+  history.contact.push_back(e.penalty);
+  history.external_work.push_back(e.external_work);
+  history.damping.push_back(e.damping_dissipation);
+  history.friction.push_back(e.friction_dissipation);
+  history.balance.push_back(e.total() - initial_total);
+  history.relative_error.push_back(integrator.energy_error());
+}
+
+/// transient.json of the reduced model: the full model's common fields and the reduction's.
+nlohmann::json reduced_transient_json(const ReducedModel& reduced, const reduced::ReducedIntegrator& integrator,
+                                      int steps_per_period, const transient::TransientSummary& summary) {
+  nlohmann::json json = transient::transient_json(summary);
+  json["model"] = "reduced";
+  json["modes"] = reduced.modes;
+  json["pairs"] = reduced.pairs;
+  json["rows"] = reduced.system.n_rows();
+  json["max_frequency_hz"] = reduced.max_frequency_hz;
+  json["highest_mode_hz"] = reduced.system.n_modes() > 0 ? reduced.system.omega.maxCoeff() / (2.0 * M_PI) : 0.0;
+  json["steps_per_period"] = steps_per_period;
+  json["reduction_cached"] = reduced.from_cache;
+  json["reduction"] = {{"modes_s", reduced.modes_s}, {"flexibility_s", reduced.flexibility_s},
+                       {"computed_modes", reduced.computed_modes}};
+  json["penalty"] = {{"normal", reduced.system.normal_penalty}, {"tangential", reduced.system.tangential_penalty},
+                     {"friction", reduced.system.friction_coefficient}};
+  json["contact_iterations"] = integrator.total_iterations();
+  json["contact_factorizations"] = integrator.total_factorizations();
+  return json;
+}
+
+transient::TransientSummary reduced_summary(const ReducedModel& reduced, const TransientSetup& setup, double dt,
+                                            double setup_s) {
+  transient::TransientSummary summary;
+  summary.status = "completed";
+  summary.dt = dt;
+  summary.damping = setup.settings.damping;
+  summary.setup_s = setup_s;
+  summary.n_dofs = reduced.system.n_modes();
+  summary.kernel = "reduced";
+  return summary;
+}
+
+/// The time loop: sample (time t_i), feed the spectrum, step; energy rows every 10 steps.
+void march_reduced(reduced::ReducedIntegrator& integrator, const ReducedModel& reduced, Index n_steps, double dt,
+                   std::optional<SpectrumMonitor>& spectrum, ReducedRecords& records,
+                   transient::TransientSummary& summary) {
+  constexpr Index kEnergyInterval = 10;
+  const double initial_total = integrator.energy().total();
+  const VectorX empty;
+  double closed = 0.0;
+  for (Index i = 0; i < n_steps; ++i) {
+    reduced_sample(integrator, reduced.system, dt, records);
+    if (i % kEnergyInterval == 0) reduced_energy_row(integrator, initial_total, records);
+    const transient::StepView view{i, integrator.time(), dt, records.sample, empty, empty};
+    if (spectrum && spectrum->add(view)) {
+      summary.status = "stopped";
+      summary.message = "steady state reached";
+      break;
+    }
+    integrator.step();
+    closed += integrator.closed_fraction();
+  }
+  summary.contact_fraction = integrator.n_steps_taken() > 0 ? closed / integrator.n_steps_taken() : 0.0;
+}
+
+/// The reduced model's time step: steps_per_period over the highest retained mode or max_frequency,
+/// lowered to divide the excitation period into whole steps (exact DFT bins).
+double reduced_step(const ReducedModel& reduced, int steps_per_period, double frequency) {
+  double dt = reduced::reduced_time_step(reduced.system, reduced.max_frequency_hz, steps_per_period);
+  if (frequency > 0.0) dt = 1.0 / frequency / std::ceil(1.0 / frequency / dt - 1e-9);
+  return dt;
+}
+
+/// Stage 2 with transient.model: reduced: the same callbacks and files as the full transient (probes.csv,
+/// energy.csv of the reduced model's energy balance, transient.json with the reduction's fields).
+transient::ProbeHistory run_reduced_stage(const scene::Scene& scene, const Model& model, TransientSetup& setup,
+                                          const RunCommandOptions& options, std::optional<SpectrumMonitor>& spectrum,
+                                          double& dt, std::ostream& out) {
+  const scene::TransientSection& section = *scene.transient;
+  Stopwatch clock;
+  ReducedModel reduced = build_reduced_model(scene, model, setup.frequency, options.modal_cache);
+  reduced.system.rayleigh_alpha = setup.settings.damping.alpha;
+  reduced.system.rayleigh_beta = setup.settings.damping.beta;
+  const int steps_per_period = section.reduced.steps_per_period;
+  dt = reduced_step(reduced, steps_per_period, setup.frequency);
+  const transient::Signal signal = setup.problem.loads.empty() ? transient::Signal{} : setup.problem.loads[0].signal;
+  const bool loaded = !setup.problem.loads.empty();
+  reduced::ReducedIntegrator integrator(reduced.system, dt, [signal, loaded](double t) {
+    return loaded ? signal.value(t) : 0.0;
+  });
+  integrator.set_initial_state(VectorX::Zero(reduced.system.n_modes()), VectorX::Zero(reduced.system.n_modes()));
+  const double setup_s = clock.seconds();
+  if (scene.spectrum) spectrum.emplace(scene, setup.frequency, dt);
+  transient::TransientSummary summary = reduced_summary(reduced, setup, dt, setup_s);
+  ReducedRecords records;
+  for (const scene::ProbeSection& probe : section.probes) records.probes.names.push_back(probe.name);
+  records.probes.values.assign(9 * section.probes.size(), {});
+  const Index n_steps = static_cast<Index>(std::ceil(setup.settings.end_time / dt - 1e-9));
+  Stopwatch run_clock;
+  try {
+    march_reduced(integrator, reduced, n_steps, dt, spectrum, records, summary);
+  } catch (const SolverError& error) {
+    summary.status = "unstable";
+    summary.message = error.what();
+  }
+  summary.wall_s = run_clock.seconds();
+  summary.time = integrator.time();
+  summary.steps = integrator.n_steps_taken();
+  summary.energy_error = integrator.energy_error();
+  const fs::path& directory = options.output_directory;
+  transient::write_probe_csv(directory / "probes.csv", records.probes);
+  transient::write_energy_csv(directory / "energy.csv", records.energy);
+  io::write_json(directory / "transient.json", reduced_transient_json(reduced, integrator, steps_per_period, summary));
+  out << "reduced model: " << reduced.modes << " modes (to " << reduced.max_frequency_hz << " Hz), " << reduced.pairs
+      << " pairs, " << steps_per_period << " steps per period, setup " << reduced.setup_s << " s"
+      << (reduced.from_cache ? " (reduction from the cache)" : "") << "\n";
+  out << "transient: " << summary.steps << " steps of " << dt << " s (reduced), " << summary.status
+      << ", energy error " << summary.energy_error << ", " << std::setprecision(3) << summary.wall_s << " s\n";
+  if (summary.status == "unstable") throw SolverError(scene.file + ": transient (reduced): " + summary.message);
+  return std::move(records.probes);
+}
+
 void write_run_json(const scene::Scene& scene, const fs::path& directory, const std::vector<Stage>& stages,
                     double frequency, double wall_s) {
   nlohmann::json run_json = {{"scene", scene.file}, {"output", directory.string()}};
@@ -426,24 +583,34 @@ void run_run_command(const RunCommandOptions& options, std::ostream& out) {
   const std::optional<modal::ModalResult> modes = run_modal_stage(scene, model, directory, options.modal_cache, modal_stage, out);
   stages.push_back(modal_stage);
 
-  Stage transient_stage{"transient", true, "the scene has a transient: section"};
+  Stage transient_stage{"transient", true, "the scene has a transient: section (model: " + scene.transient->model + ")"};
   Stopwatch transient_clock;
   TransientSetup setup = transient_setup(scene, model, modes, options);
   std::optional<SpectrumMonitor> spectrum;
-  const auto solver = run_transient_stage(scene, model, setup, directory, spectrum);
-  const transient::TransientSummary& summary = solver->summary();
+  std::unique_ptr<transient::TransientSolver> solver;
+  transient::ProbeHistory reduced_probes;
+  double dt = 0.0;
+  if (scene.transient->model == "reduced") {
+    reduced_probes = run_reduced_stage(scene, model, setup, options, spectrum, dt, out);
+  } else {
+    solver = run_transient_stage(scene, model, setup, directory, spectrum);
+    dt = solver->dt();
+  }
   transient_stage.seconds = transient_clock.seconds();
   stages.push_back(transient_stage);
-  out << "transient: " << summary.steps << " steps of " << summary.dt << " s (dt_critical " << summary.dt_critical
-      << " s), " << summary.status << ", energy error " << summary.energy_error << ", " << std::setprecision(3)
-      << summary.wall_s << " s\n";
+  if (solver) {
+    const transient::TransientSummary& summary = solver->summary();
+    out << "transient: " << summary.steps << " steps of " << summary.dt << " s (dt_critical " << summary.dt_critical
+        << " s), " << summary.status << ", energy error " << summary.energy_error << ", " << std::setprecision(3)
+        << summary.wall_s << " s\n";
+  }
 
   Stage spectrum_stage{"spectrum", false, "the scene has no spectrum: section", 0.0};
   if (spectrum) {
     Stopwatch clock;
     spectrum_stage.ran = true;
     spectrum_stage.reason = "the scene has a spectrum: section";
-    spectrum->write(scene, directory, solver->probes(), solver->dt(), out);
+    spectrum->write(scene, directory, solver ? solver->probes() : reduced_probes, dt, out);
     spectrum_stage.seconds = clock.seconds();
   }
   stages.push_back(spectrum_stage);

@@ -9,6 +9,7 @@
 #include "modal/modal.hpp"
 #include "pipeline/model.hpp"
 #include "scene/scene.hpp"
+#include "transient/damping.hpp"
 
 namespace crackle::pipeline {
 
@@ -23,6 +24,9 @@ struct Stage {
 /// Frequency [Hz] of elastic mode `mode` (1-based) of the given kind (bilinear, uncracked, open)
 /// from a modal result. InputError naming `key` when that mode was not computed or not paired.
 double mode_frequency(const modal::ModalResult& result, int mode, const std::string& of, const std::string& key);
+
+/// Rayleigh damping of transient.damping: a ratio at a frequency (or a mode of `modes`), or alpha and beta.
+transient::RayleighDamping scene_damping(const scene::Scene& scene, const std::optional<modal::ModalResult>& modes);
 
 /// The modal stage: the variants the scene needs (a mode referred to by transient.excitation,
 /// transient.damping or sweep.frequency, or a modal: section), with modal.json etc. written to

@@ -199,6 +199,22 @@ Param build_parameters() {
                                  "diverging run).").defaults_to("false"),
       choice("variant", "Run the body with its crack (open faces with contact) or with the faces tied.",
              {"open", "uncracked"}).defaults_to("open"),
+      choice("model", "full: the explicit finite-element model (MODEL.md eqs. 24-28); reduced: modes of the "
+                      "variant + residual flexibility at the crack pairs (HYBRID.md sec. 2-3), implicit steps set "
+                      "by accuracy; needs a body held by boundary: conditions.", {"full", "reduced"})
+          .defaults_to("full"),
+      map_of("reduced", "The reduced model (transient.model: reduced).", {
+        integer("modes", "Modes kept; auto: every mode of the variant up to max_frequency.").at_least(1)
+            .or_word("auto").defaults_to("auto"),
+        number("max_frequency", "Highest frequency resolved: modes up to it (modes: auto) and the time step; "
+                                "auto: 4 x spectrum.harmonics (5 without spectrum:) x the excitation frequency.")
+            .with_unit("Hz").above(0).or_word("auto").defaults_to("auto"),
+        integer("steps_per_period", "Time steps per period of the highest retained mode or of max_frequency, "
+                                    "whichever is higher (average-acceleration Newmark: frequency error "
+                                    "(2 pi / n)^2 / 12).").at_least(4).defaults_to("40"),
+        boolean("residual_flexibility", "Keep the static correction of the truncated modes (HYBRID.md sec. 2); "
+                                        "false only to measure what it brings.").defaults_to("true"),
+      }),
       list_of("probes", "Points whose displacement, velocity and acceleration are recorded (nearest node).", {
         text("name", "Name of the probe: letters, digits, _ . - (column prefix, file names, spectrum.json key).")
             .required(),
@@ -500,6 +516,13 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
   transient.safety_factor = values.number("transient.safety_factor");
   transient.force_time_step = values.flag("transient.force_time_step");
   transient.variant = values.word("transient.variant");
+  transient.model = values.word("transient.model");
+  if (!values.is_word("transient.reduced.modes")) transient.reduced.modes = values.integer("transient.reduced.modes");
+  if (!values.is_word("transient.reduced.max_frequency")) {
+    transient.reduced.max_frequency_hz = values.number("transient.reduced.max_frequency");
+  }
+  transient.reduced.steps_per_period = values.integer("transient.reduced.steps_per_period");
+  transient.reduced.residual_flexibility = values.flag("transient.reduced.residual_flexibility");
   for (int i = 0; i < values.count("transient.probes"); ++i) {
     const std::string entry = "transient.probes[" + std::to_string(i) + "]";
     ProbeSection probe;
@@ -529,6 +552,20 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
     transient.initial.push_back(initial);
   }
   transient.snapshots = values.integer("transient.snapshots.count");
+  if (transient.model == "reduced") {
+    if (transient.time_step) {
+      values.fail("transient.time_step", "auto with transient.model: reduced (its step is set by "
+                  "transient.reduced.steps_per_period)", format_number(*transient.time_step));
+    }
+    if (!transient.initial.empty()) {
+      values.fail("transient.initial", "no initial fields with transient.model: reduced (not supported yet; "
+                  "start from rest, e.g. with a pulse)", std::to_string(transient.initial.size()) + " entries");
+    }
+    if (transient.snapshots > 0) {
+      values.fail("transient.snapshots.count", "0 with transient.model: reduced (it has no displacement field)",
+                  std::to_string(transient.snapshots));
+    }
+  }
   transient.progress = values.flag("transient.progress");
   if (transient.variant == "open" && !scene.has_crack()) transient.variant = "uncracked";
   return transient;

@@ -115,6 +115,14 @@ struct InitialSection {
 };
 
 /// `transient:` (issue 4).
+/// `transient.reduced:` (the reduced model, HYBRID.md sec. 2-3).
+struct ReducedSection {
+  int modes = 0;                 ///< 0: auto (every mode up to max_frequency)
+  double max_frequency_hz = 0.0; ///< 0: auto
+  int steps_per_period = 40;
+  bool residual_flexibility = true;
+};
+
 struct TransientSection {
   std::optional<ExcitationSection> excitation;
   DampingSection damping;
@@ -124,6 +132,8 @@ struct TransientSection {
   double safety_factor = 0.9;
   bool force_time_step = false;
   std::string variant = "open";
+  std::string model = "full";  ///< "full" or "reduced"
+  ReducedSection reduced;
   std::vector<ProbeSection> probes;
   std::vector<InitialSection> initial;
   int snapshots = 0;

@@ -455,8 +455,6 @@ json study_json(const StudyPlan& plan, const StudyTable& table, const std::vecto
   int n_ok = 0, n_failed = 0;
   double wall_s = 0.0;
   json rows = json::array();
-  add_sweep_columns(cases, kind, add);
-
   for (std::size_t i = 0; i < plan.cases.size(); ++i) {
     const StudyCase& study_case = plan.cases[i];
     json row = i < cases.size() && cases[i].is_object() ? cases[i] : json::object();
