@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "pipeline/commands.hpp"
+#include "pipeline/sweep.hpp"
 #include "core/errors.hpp"
 #include "modal/eigensolver.hpp"
 #include "scene/scene.hpp"
@@ -217,6 +218,21 @@ int main(int argc, char** argv) {
   run_command->add_option("--petsc", run_petsc, "PETSc/SLEPc options, e.g. --petsc \"-eps_view\" (repeatable)");
   run_command->footer(kPetscChannel);
 
+  pipeline::SweepCommandOptions sweep;
+  bool sweep_quiet = false;
+  CLI::App* sweep_command = cli.add_subcommand(
+      "sweep", "Frequency sweep of the scene's sweep: section on the reduced model (modal stage only for a "
+               "mode-relative range): harmonic balance with arclength continuation and Hill stability, or a "
+               "stepped sine (reduced transient to steady state per frequency, up then down). Writes sweep.csv "
+               "(amplitude and phase of every order per probe, A2/A1, A3/A1, stability), sweep.json (settings, "
+               "timings, folds and bifurcations, H-convergence warnings) and sweep_<probe>.png; progress on stderr");
+  sweep_command->add_option("scene", sweep.scene_path, "Scene file (YAML) with a sweep: section")->required();
+  sweep_command->add_option("--set", sweep.overrides, "Override a scene value: --set key.path=value (repeatable)");
+  sweep_command->add_option("-o,--output", sweep.output_directory, "Output directory")->capture_default_str();
+  sweep_command->add_option("--modal-cache", sweep.modal_cache,
+                            "Folder where the uncracked solve (and the reduced model) are looked up and stored");
+  sweep_command->add_flag("-q,--quiet", sweep_quiet, "No progress line");
+
   study::StudyOptions study_options;
   study_options.executable = "/proc/self/exe";
   bool no_modal_cache = false;
@@ -237,13 +253,13 @@ int main(int argc, char** argv) {
 
   CLI::App* format_command =
       cli.add_subcommand("scene-format", "Print the reference of every scene key (Markdown)");
-  for (CLI::App* command : {check_command, modal_command, run_command, study_command, format_command})
+  for (CLI::App* command : {check_command, modal_command, run_command, sweep_command, study_command, format_command})
     command->allow_extras();
 
   // Crackle's own arguments before `--`, PETSc's after it.
   SplitArguments arguments = split_arguments(argc, argv);
   std::vector<std::string> commands;
-  for (const CLI::App* command : {check_command, modal_command, run_command, study_command, format_command})
+  for (const CLI::App* command : {check_command, modal_command, run_command, sweep_command, study_command, format_command})
     commands.push_back(command->get_name());
   if (arguments.own.size() > 1 && arguments.own[1][0] != '-' &&
       std::find(commands.begin(), commands.end(), arguments.own[1]) == commands.end()) {
@@ -301,6 +317,12 @@ int main(int argc, char** argv) {
       PetscArguments petsc(arguments.own.front(), run_petsc, arguments.petsc);
       modal::SlepcSession session(petsc.argc(), petsc.argv());
       pipeline::run_run_command(run, std::cout);
+    }
+    if (*sweep_command) {
+      sweep.progress = !sweep_quiet;
+      PetscArguments petsc(arguments.own.front(), {}, {});
+      modal::SlepcSession session(petsc.argc(), petsc.argv());
+      pipeline::run_sweep_command(sweep, std::cout, std::cerr);
     }
     if (*study_command) {
       study_options.modal_cache = !no_modal_cache;

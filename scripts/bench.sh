@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs the benchmarks and prints Markdown tables for docs/benchmarks.md.
-# Usage: scripts/bench.sh [assembly|modal|modal-scale|transient|spectrum|study|all]   (default all)
+# Usage: scripts/bench.sh [assembly|modal|modal-scale|transient|spectrum|study|reduced|all]   (default all)
+# (reduced: data/beam.yaml full vs transient.model=reduced; FULL_DIR=dir reuses a full run's outputs)
 # (modal = work-precision + scale; modal-scale = the scale part alone)
 #
 # Environment:
@@ -17,8 +18,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 what="${1:-all}"
-case "$what" in assembly|modal|modal-scale|transient|spectrum|study|all) ;; *)
-  echo "usage: scripts/bench.sh [assembly|modal|modal-scale|transient|spectrum|study|all]" >&2; exit 2 ;;
+case "$what" in assembly|modal|modal-scale|transient|spectrum|study|reduced|all) ;; *)
+  echo "usage: scripts/bench.sh [assembly|modal|modal-scale|transient|spectrum|study|reduced|all]" >&2; exit 2 ;;
 esac
 if [[ -n "${BUILD:-}" ]]; then
   [[ "${BENCH_NO_BUILD:-0}" == 1 ]] || cmake --build "$BUILD" -j"$(nproc)" >/dev/null
@@ -139,4 +140,37 @@ EOF
   else
     echo "(no $dir/study.csv: run \`/usr/bin/time -v -o /tmp/depth.time crackle study data/depth-study.yaml -o $dir\` first)"
   fi
+fi
+
+if want reduced; then
+  echo
+  echo "### Reduced vs full transient: data/beam.yaml (wall time end to end, spectrum indices)"
+  load
+  full="${FULL_DIR:-$out/reduced-full}"
+  [[ -f "$full/run.json" ]] || "$crackle" run data/beam.yaml -o "$full" -q >/dev/null
+  cache="$out/reduced-cache"
+  rm -rf "$cache"
+  runs=()
+  red() { local name=$1; shift; "$crackle" run data/beam.yaml -o "$out/$name" -q --set transient.model=reduced "$@" >/dev/null; runs+=("$out/$name"); }
+  red reduced-cold --modal-cache "$cache"
+  red reduced-cached --modal-cache "$cache" --set transient.excitation.amplitude=40
+  for m in 10 20 40 80; do red "reduced-m$m" --modal-cache "$cache" --set transient.reduced.modes=$m; done
+  for n in 20 80; do red "reduced-s$n" --modal-cache "$cache" --set transient.reduced.steps_per_period=$n; done
+  python3 - "$full" "${runs[@]}" <<'PY'
+import json, sys
+def read(d):
+    r = json.load(open(d + "/run.json")); t = json.load(open(d + "/transient.json")); s = json.load(open(d + "/spectrum.json"))
+    p = s["probes"]["tip"]; a1 = [h["amplitude"] for h in p["harmonics"] if h["order"] == 1][0]
+    st = {x["name"]: x["seconds"] for x in r["stages"]}
+    return r["wall_s"], st, t, a1, p["indices"]
+fw, fst, ft, fa1, fi = read(sys.argv[1])
+print("| run | modes | steps/period | steps | wall s | transient stage s | cached | A1 err | A2/A1 err | A3/A1 err |")
+print("|---|---|---|---|---|---|---|---|---|---|")
+print(f"| full | - | - | {ft['steps']} | {fw:.1f} | {fst['transient']:.1f} | - | 0 | 0 | 0 |")
+for d in sys.argv[2:]:
+    w, st, t, a1, i = read(d)
+    scale = 2.0 if "cached" in d else 1.0  # the cached case doubles the amplitude
+    print(f"| {d.split('/')[-1]} | {t['modes']} | {t['steps_per_period']} | {t['steps']} | {w:.2f} | {st['transient']:.2f} | "
+          f"{t['reduction_cached']} | {a1 / scale / fa1 - 1:.1e} | {i['A2/A1'] / fi['A2/A1'] - 1:.1e} | {i['A3/A1'] / fi['A3/A1'] - 1:.1e} |")
+PY
 fi

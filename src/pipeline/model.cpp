@@ -137,6 +137,16 @@ std::vector<scene::Override> parse_overrides(const std::vector<std::string>& ass
   return overrides;
 }
 
+contact::ContactOptions scene_contact_options(const scene::Scene& scene) {
+  contact::ContactOptions contact;
+  contact.initial_gap = scene.crack ? scene.crack->gap : (scene.crack_group ? scene.crack_group->gap : 0.0);
+  contact.normal_penalty = scene.contact.penalty.value_or(0.0);
+  contact.friction_coefficient = scene.contact.friction;
+  contact.integration = scene.contact.integration == "explicit" ? contact::ContactIntegration::explicit_forces
+                                                                : contact::ContactIntegration::implicit;
+  return contact;
+}
+
 Model build_model(const scene::Scene& scene) {
   Model model;
   if (!scene.gmsh_file.empty()) {

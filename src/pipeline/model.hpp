@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "contact/contact.hpp"
 #include "fem/assembly.hpp"
 #include "fem/constraints.hpp"
 #include "fem/system.hpp"
@@ -39,6 +40,9 @@ struct Model {
  private:
   mutable std::map<mesh::Variant, std::shared_ptr<const fem::System>> systems_;
 };
+
+/// The crack contact of the scene's `crack.contact` (and the crack's gap g0).
+contact::ContactOptions scene_contact_options(const scene::Scene& scene);
 
 /// Meshes the body, makes its materials and turns `boundary:` into Dirichlet conditions.
 /// Throws InputError (naming the scene file) for problems only visible once meshed.

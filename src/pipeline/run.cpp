@@ -15,6 +15,9 @@
 #include "io/vtu.hpp"
 #include "pipeline/model.hpp"
 #include "pipeline/release.hpp"
+#include "pipeline/reduced_model.hpp"
+#include "pipeline/stages.hpp"
+#include "reduced/integrator.hpp"
 #include "modal/modal.hpp"
 #include "spectral/harmonics.hpp"
 #include "spectral/plot.hpp"
@@ -30,14 +33,6 @@ namespace crackle::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
-
-/// One line of run.json: a stage, whether it ran, why, and its time.
-struct Stage {
-  std::string name;
-  bool ran = false;
-  std::string reason;
-  double seconds = 0.0;
-};
 
 /// The modal variants the scene needs (empty: no modal stage).
 std::vector<mesh::Variant> needed_variants(const scene::Scene& scene, std::string& reason) {
@@ -57,6 +52,14 @@ std::vector<mesh::Variant> needed_variants(const scene::Scene& scene, std::strin
     variants.insert(mesh::Variant::uncracked);
     if (reason.empty()) reason = "transient.damping.at refers to mode " + std::to_string(transient.damping.at_mode);
   }
+  if (scene.sweep) {
+    for (const scene::SweepFrequencySection* end : {&scene.sweep->from, &scene.sweep->to}) {
+      if (end->mode == 0) continue;
+      if (end->of != "open") variants.insert(mesh::Variant::uncracked);
+      if (end->of != "uncracked") variants.insert(mesh::Variant::open);
+      if (reason.empty()) reason = "sweep.frequency refers to mode " + std::to_string(end->mode);
+    }
+  }
   if (scene.has_modal_section) {
     for (const std::string& name : scene.modal.variants) {
       variants.insert(name == "open" ? mesh::Variant::open : mesh::Variant::uncracked);
@@ -69,32 +72,6 @@ std::vector<mesh::Variant> needed_variants(const scene::Scene& scene, std::strin
     if (variants.count(variant)) ordered.push_back(variant);
   }
   return ordered;
-}
-
-/// Frequency [Hz] of elastic mode `mode` (1-based) of the given kind from a modal result.
-double mode_frequency(const modal::ModalResult& result, int mode, const std::string& of, const std::string& key) {
-  const int index = mode - 1;
-  if (of == "bilinear") {
-    if (index >= static_cast<int>(result.pairs.size())) {
-      throw InputError(key + ": mode " + std::to_string(mode) + " asked, but only " +
-                       std::to_string(result.pairs.size()) + " modes were paired (raise modal.modes)");
-    }
-    const modal::ModePair& pair = result.pairs[index];
-    if (!pair.paired) {
-      throw InputError(key + ": mode " + std::to_string(mode) + " has no open partner among the " +
-                       std::to_string(result.mac.cols()) + " open modes computed (best MAC " +
-                       format_number(pair.mac) + " < " + format_number(modal::kPairingMac) +
-                       "), so its bilinear frequency is undefined (raise modal.modes)");
-    }
-    return pair.f_bilinear_hz;
-  }
-  const modal::VariantResult* variant =
-      result.find(of == "open" ? mesh::Variant::open : mesh::Variant::uncracked);
-  if (!variant || index >= variant->modes.n_modes()) {
-    throw InputError(key + ": mode " + std::to_string(mode) + " of the " + of + " body asked, but only " +
-                     std::to_string(variant ? variant->modes.n_modes() : 0) + " modes were computed");
-  }
-  return variant->modes.frequencies_hz[index];
 }
 
 std::vector<Index> nodes_in_range(const mesh::Mesh& mesh, const scene::InitialSection& initial) {
@@ -118,32 +95,6 @@ struct ProbeSpectrum {
   std::unique_ptr<spectral::HarmonicAccumulator> accumulator;
 };
 
-
-/// Stage 1: the modes, only if something needs them (or the scene asks for them).
-std::optional<modal::ModalResult> run_modal_stage(const scene::Scene& scene, const Model& model,
-                                                  const RunCommandOptions& options, Stage& stage, std::ostream& out) {
-  const std::vector<mesh::Variant> variants = needed_variants(scene, stage.reason);
-  if (variants.empty()) {
-    stage.reason = "nothing refers to a mode";
-    return std::nullopt;
-  }
-  const scene::TransientSection& section = *scene.transient;
-  Stopwatch clock;
-  modal::ModalOptions modal_settings = modal_options(scene.modal);
-  modal_settings.variants = variants;
-  int highest = scene.has_modal_section ? scene.modal.modes : 1;
-  if (section.excitation) highest = std::max(highest, section.excitation->mode);
-  if (section.release) highest = std::max(highest, section.release->mode);
-  modal_settings.modes = std::max(highest, section.damping.at_mode);
-  modal_settings.cache_directory = options.modal_cache;
-  modal::ModalResult modes = modal::run_modal(
-      [&model](mesh::Variant variant) -> const fem::System& { return *model.system(variant); }, modal_settings);
-  modal::write_modal_outputs(options.output_directory, model.mesh, modes);
-  stage.ran = true;
-  stage.seconds = clock.seconds();
-  out << modal::modal_table(modes);
-  return modes;
-}
 
 /// The transient stage's inputs, from the scene and the modes.
 struct TransientSetup {
@@ -180,6 +131,8 @@ transient::ExternalLoad excitation_load(const scene::Scene& scene, const Model& 
   return load;
 }
 
+}  // namespace
+
 /// Rayleigh damping from a ratio at a frequency (or a mode), or from alpha and beta.
 transient::RayleighDamping scene_damping(const scene::Scene& scene, const std::optional<modal::ModalResult>& modes) {
   const scene::DampingSection& damping = scene.transient->damping;
@@ -192,16 +145,7 @@ transient::RayleighDamping scene_damping(const scene::Scene& scene, const std::o
                                      : transient::mass_proportional_damping(*damping.ratio, omega);
 }
 
-/// The crack contact of the scene's `crack.contact`.
-contact::ContactOptions scene_contact(const scene::Scene& scene) {
-  contact::ContactOptions contact;
-  contact.initial_gap = scene.crack ? scene.crack->gap : (scene.crack_group ? scene.crack_group->gap : 0.0);
-  contact.normal_penalty = scene.contact.penalty.value_or(0.0);
-  contact.friction_coefficient = scene.contact.friction;
-  contact.integration = scene.contact.integration == "explicit" ? contact::ContactIntegration::explicit_forces
-                                                                : contact::ContactIntegration::implicit;
-  return contact;
-}
+namespace {
 
 /// Initial fields (uniform per coordinate box) over the run's DOFs.
 void add_initial_fields(const scene::TransientSection& section, const Model& model, const mesh::DofMap& dofs,
@@ -227,7 +171,7 @@ TransientSetup transient_setup(const scene::Scene& scene, const Model& model,
   const fem::System& system = *model.system(setup.variant);
   const bool with_contact =
       setup.variant == mesh::Variant::open && model.mesh.has_crack() && scene.contact.model != "none";
-  const contact::ContactOptions contact_options = scene_contact(scene);
+  const contact::ContactOptions contact_options = scene_contact_options(scene);
   if (with_contact) {
     setup.contact = std::make_shared<contact::ContactForce>(model.mesh, system.dofs(), model.materials, contact_options);
     setup.problem.terms.push_back(setup.contact);
@@ -556,6 +500,168 @@ std::unique_ptr<transient::TransientSolver> run_transient_stage(const scene::Sce
   return solver;
 }
 
+/// Probe and energy records of the reduced transient, in the full transient's CSV layout.
+struct ReducedRecords {
+  transient::ProbeHistory probes;
+  transient::EnergyHistory energy;
+  std::vector<double> sample;   ///< 9 per probe: u, v, a (x, y, z each)
+  VectorX previous_residual;    ///< residual (massless) part of the outputs at the previous sample
+  VectorX previous_residual_rate;
+};
+
+/// The probe sample of the integrator's state: the modal part of v and a exactly, the massless
+/// residual part (C G_res (B^T p + f a)) by differences of successive samples.
+void reduced_sample(const reduced::ReducedIntegrator& integrator, const reduced::ReducedSystem& system, double h,
+                    ReducedRecords& records) {
+  const VectorX outputs = integrator.outputs();
+  const VectorX modal = system.output_modes * integrator.modal_displacement();
+  const VectorX residual = outputs - modal;
+  const bool first = records.previous_residual.size() == 0;
+  const VectorX rate = first ? VectorX::Zero(residual.size()).eval() : ((residual - records.previous_residual) / h).eval();
+  const VectorX rate_change = first ? VectorX::Zero(residual.size()).eval()
+                                    : ((rate - records.previous_residual_rate) / h).eval();
+  const VectorX velocity = system.output_modes * integrator.modal_velocity() + rate;
+  const VectorX acceleration = system.output_modes * integrator.modal_acceleration() + rate_change;
+  records.sample.assign(3 * static_cast<std::size_t>(outputs.size()), 0.0);
+  for (Index row = 0; row < outputs.size(); ++row) {
+    const Index probe = row / 3, c = row % 3;
+    records.sample[9 * probe + c] = outputs[row];
+    records.sample[9 * probe + 3 + c] = velocity[row];
+    records.sample[9 * probe + 6 + c] = acceleration[row];
+  }
+  records.previous_residual = residual;
+  records.previous_residual_rate = rate;
+  records.probes.time.push_back(integrator.time());
+  for (std::size_t k = 0; k < records.sample.size(); ++k) records.probes.values[k].push_back(records.sample[k]);
+}
+
+void reduced_energy_row(const reduced::ReducedIntegrator& integrator, double initial_total, ReducedRecords& records) {
+  const reduced::ReducedEnergy& e = integrator.energy();
+  transient::EnergyHistory& history = records.energy;
+  history.time.push_back(integrator.time());
+  history.kinetic.push_back(e.kinetic);
+  history.strain.push_back(e.modal_strain + e.residual_strain);
+  history.contact.push_back(e.penalty);
+  history.external_work.push_back(e.external_work);
+  history.damping.push_back(e.damping_dissipation);
+  history.friction.push_back(e.friction_dissipation);
+  history.balance.push_back(e.total() - initial_total);
+  history.relative_error.push_back(integrator.energy_error());
+}
+
+/// transient.json of the reduced model: the full model's common fields and the reduction's.
+nlohmann::json reduced_transient_json(const ReducedModel& reduced, const reduced::ReducedIntegrator& integrator,
+                                      int steps_per_period, const transient::TransientSummary& summary) {
+  nlohmann::json json = transient::transient_json(summary);
+  json["model"] = "reduced";
+  json["modes"] = reduced.modes;
+  json["pairs"] = reduced.pairs;
+  json["rows"] = reduced.system.n_rows();
+  json["max_frequency_hz"] = reduced.max_frequency_hz;
+  json["highest_mode_hz"] = reduced.system.n_modes() > 0 ? reduced.system.omega.maxCoeff() / (2.0 * M_PI) : 0.0;
+  json["steps_per_period"] = steps_per_period;
+  json["reduction_cached"] = reduced.from_cache;
+  json["reduction"] = {{"modes_s", reduced.modes_s}, {"flexibility_s", reduced.flexibility_s},
+                       {"computed_modes", reduced.computed_modes}};
+  json["penalty"] = {{"normal", reduced.system.normal_penalty}, {"tangential", reduced.system.tangential_penalty},
+                     {"friction", reduced.system.friction_coefficient}};
+  json["contact_iterations"] = integrator.total_iterations();
+  json["contact_factorizations"] = integrator.total_factorizations();
+  return json;
+}
+
+transient::TransientSummary reduced_summary(const ReducedModel& reduced, const TransientSetup& setup, double dt,
+                                            double setup_s) {
+  transient::TransientSummary summary;
+  summary.status = "completed";
+  summary.dt = dt;
+  summary.damping = setup.settings.damping;
+  summary.setup_s = setup_s;
+  summary.n_dofs = reduced.system.n_modes();
+  summary.kernel = "reduced";
+  return summary;
+}
+
+/// The time loop: sample (time t_i), feed the spectrum, step; energy rows every 10 steps.
+void march_reduced(reduced::ReducedIntegrator& integrator, const ReducedModel& reduced, Index n_steps, double dt,
+                   std::optional<SpectrumMonitor>& spectrum, ReducedRecords& records,
+                   transient::TransientSummary& summary) {
+  constexpr Index kEnergyInterval = 10;
+  const double initial_total = integrator.energy().total();
+  const VectorX empty;
+  double closed = 0.0;
+  for (Index i = 0; i < n_steps; ++i) {
+    reduced_sample(integrator, reduced.system, dt, records);
+    if (i % kEnergyInterval == 0) reduced_energy_row(integrator, initial_total, records);
+    const transient::StepView view{i, integrator.time(), dt, records.sample, empty, empty};
+    if (spectrum && spectrum->add(view)) {
+      summary.status = "stopped";
+      summary.message = "steady state reached";
+      break;
+    }
+    integrator.step();
+    closed += integrator.closed_fraction();
+  }
+  summary.contact_fraction = integrator.n_steps_taken() > 0 ? closed / integrator.n_steps_taken() : 0.0;
+}
+
+/// The reduced model's time step: steps_per_period over the highest retained mode or max_frequency,
+/// lowered to divide the excitation period into whole steps (exact DFT bins).
+double reduced_step(const ReducedModel& reduced, int steps_per_period, double frequency) {
+  double dt = reduced::reduced_time_step(reduced.system, reduced.max_frequency_hz, steps_per_period);
+  if (frequency > 0.0) dt = 1.0 / frequency / std::ceil(1.0 / frequency / dt - 1e-9);
+  return dt;
+}
+
+/// Stage 2 with transient.model: reduced: the same callbacks and files as the full transient (probes.csv,
+/// energy.csv of the reduced model's energy balance, transient.json with the reduction's fields).
+transient::ProbeHistory run_reduced_stage(const scene::Scene& scene, const Model& model, TransientSetup& setup,
+                                          const RunCommandOptions& options, std::optional<SpectrumMonitor>& spectrum,
+                                          double& dt, std::ostream& out) {
+  const scene::TransientSection& section = *scene.transient;
+  Stopwatch clock;
+  ReducedModel reduced = build_reduced_model(scene, model, setup.frequency, options.modal_cache);
+  reduced.system.rayleigh_alpha = setup.settings.damping.alpha;
+  reduced.system.rayleigh_beta = setup.settings.damping.beta;
+  const int steps_per_period = section.reduced.steps_per_period;
+  dt = reduced_step(reduced, steps_per_period, setup.frequency);
+  const transient::Signal signal = setup.problem.loads.empty() ? transient::Signal{} : setup.problem.loads[0].signal;
+  const bool loaded = !setup.problem.loads.empty();
+  reduced::ReducedIntegrator integrator(reduced.system, dt, [signal, loaded](double t) {
+    return loaded ? signal.value(t) : 0.0;
+  });
+  integrator.set_initial_state(VectorX::Zero(reduced.system.n_modes()), VectorX::Zero(reduced.system.n_modes()));
+  const double setup_s = clock.seconds();
+  if (scene.spectrum) spectrum.emplace(scene, setup.frequency, dt);
+  transient::TransientSummary summary = reduced_summary(reduced, setup, dt, setup_s);
+  ReducedRecords records;
+  for (const scene::ProbeSection& probe : section.probes) records.probes.names.push_back(probe.name);
+  records.probes.values.assign(9 * section.probes.size(), {});
+  const Index n_steps = static_cast<Index>(std::ceil(setup.settings.end_time / dt - 1e-9));
+  Stopwatch run_clock;
+  try {
+    march_reduced(integrator, reduced, n_steps, dt, spectrum, records, summary);
+  } catch (const SolverError& error) {
+    summary.status = "unstable";
+    summary.message = error.what();
+  }
+  summary.wall_s = run_clock.seconds();
+  summary.time = integrator.time();
+  summary.steps = integrator.n_steps_taken();
+  summary.energy_error = integrator.energy_error();
+  const fs::path& directory = options.output_directory;
+  transient::write_probe_csv(directory / "probes.csv", records.probes);
+  transient::write_energy_csv(directory / "energy.csv", records.energy);
+  io::write_json(directory / "transient.json", reduced_transient_json(reduced, integrator, steps_per_period, summary));
+  out << "reduced model: " << reduced.modes << " modes (to " << reduced.max_frequency_hz << " Hz), " << reduced.pairs
+      << " pairs, " << steps_per_period << " steps per period, setup " << reduced.setup_s << " s"
+      << (reduced.from_cache ? " (reduction from the cache)" : "") << "\n";
+  out << "transient: " << summary.steps << " steps of " << dt << " s (reduced), " << summary.status
+      << ", energy error " << summary.energy_error << ", " << std::setprecision(3) << summary.wall_s << " s\n";
+  if (summary.status == "unstable") throw SolverError(scene.file + ": transient (reduced): " + summary.message);
+  return std::move(records.probes);
+}
+
 void write_run_json(const scene::Scene& scene, const fs::path& directory, const std::vector<Stage>& stages,
                     double frequency, double wall_s) {
   nlohmann::json run_json = {{"scene", scene.file}, {"output", directory.string()}};
@@ -571,6 +677,59 @@ void write_run_json(const scene::Scene& scene, const fs::path& directory, const 
 
 }  // namespace
 
+/// Frequency [Hz] of elastic mode `mode` (1-based) of the given kind from a modal result.
+double mode_frequency(const modal::ModalResult& result, int mode, const std::string& of, const std::string& key) {
+  const int index = mode - 1;
+  if (of == "bilinear") {
+    if (index >= static_cast<int>(result.pairs.size())) {
+      throw InputError(key + ": mode " + std::to_string(mode) + " asked, but only " +
+                       std::to_string(result.pairs.size()) + " modes were paired (raise modal.modes)");
+    }
+    const modal::ModePair& pair = result.pairs[index];
+    if (!pair.paired) {
+      throw InputError(key + ": mode " + std::to_string(mode) + " has no open partner among the " +
+                       std::to_string(result.mac.cols()) + " open modes computed (best MAC " +
+                       format_number(pair.mac) + " < " + format_number(modal::kPairingMac) +
+                       "), so its bilinear frequency is undefined (raise modal.modes)");
+    }
+    return pair.f_bilinear_hz;
+  }
+  const modal::VariantResult* variant =
+      result.find(of == "open" ? mesh::Variant::open : mesh::Variant::uncracked);
+  if (!variant || index >= variant->modes.n_modes()) {
+    throw InputError(key + ": mode " + std::to_string(mode) + " of the " + of + " body asked, but only " +
+                     std::to_string(variant ? variant->modes.n_modes() : 0) + " modes were computed");
+  }
+  return variant->modes.frequencies_hz[index];
+}
+
+std::optional<modal::ModalResult> run_modal_stage(const scene::Scene& scene, const Model& model,
+                                                  const fs::path& output_directory, const fs::path& modal_cache,
+                                                  Stage& stage, std::ostream& out) {
+  const std::vector<mesh::Variant> variants = needed_variants(scene, stage.reason);
+  if (variants.empty()) {
+    stage.reason = "nothing refers to a mode";
+    return std::nullopt;
+  }
+  const scene::TransientSection& section = *scene.transient;
+  Stopwatch clock;
+  modal::ModalOptions modal_settings = modal_options(scene.modal);
+  modal_settings.variants = variants;
+  int highest = scene.has_modal_section ? scene.modal.modes : 1;
+  if (section.excitation) highest = std::max(highest, section.excitation->mode);
+  if (section.release) highest = std::max(highest, section.release->mode);
+  if (scene.sweep) highest = std::max({highest, scene.sweep->from.mode, scene.sweep->to.mode});
+  modal_settings.modes = std::max(highest, section.damping.at_mode);
+  modal_settings.cache_directory = modal_cache;
+  modal::ModalResult modes = modal::run_modal(
+      [&model](mesh::Variant variant) -> const fem::System& { return *model.system(variant); }, modal_settings);
+  modal::write_modal_outputs(output_directory, model.mesh, modes);
+  stage.ran = true;
+  stage.seconds = clock.seconds();
+  out << modal::modal_table(modes);
+  return modes;
+}
+
 void run_run_command(const RunCommandOptions& options, std::ostream& out) {
   Stopwatch total;
   const scene::Scene scene = scene::load_scene(options.scene_path, parse_overrides(options.overrides));
@@ -584,15 +743,22 @@ void run_run_command(const RunCommandOptions& options, std::ostream& out) {
   std::vector<Stage> stages;
 
   Stage modal_stage{"modal", false, "", 0.0};
-  const std::optional<modal::ModalResult> modes = run_modal_stage(scene, model, options, modal_stage, out);
+  const std::optional<modal::ModalResult> modes = run_modal_stage(scene, model, directory, options.modal_cache, modal_stage, out);
   stages.push_back(modal_stage);
 
-  Stage transient_stage{"transient", true, "the scene has a transient: section"};
+  Stage transient_stage{"transient", true, "the scene has a transient: section (model: " + scene.transient->model + ")"};
   Stopwatch transient_clock;
   TransientSetup setup = transient_setup(scene, model, modes, options);
   std::optional<SpectrumMonitor> spectrum;
-  const auto solver = run_transient_stage(scene, model, setup, directory, spectrum);
-  const transient::TransientSummary& summary = solver->summary();
+  std::unique_ptr<transient::TransientSolver> solver;
+  transient::ProbeHistory reduced_probes;
+  double dt = 0.0;
+  if (scene.transient->model == "reduced") {
+    reduced_probes = run_reduced_stage(scene, model, setup, options, spectrum, dt, out);
+  } else {
+    solver = run_transient_stage(scene, model, setup, directory, spectrum);
+    dt = solver->dt();
+  }
   transient_stage.seconds = transient_clock.seconds();
   stages.push_back(transient_stage);
   if (setup.release) {
@@ -604,16 +770,19 @@ void run_run_command(const RunCommandOptions& options, std::ostream& out) {
     }
     out << "\n";
   }
-  out << "transient: " << summary.steps << " steps of " << summary.dt << " s (dt_critical " << summary.dt_critical
-      << " s), " << summary.status << ", energy error " << summary.energy_error << ", " << std::setprecision(3)
-      << summary.wall_s << " s\n";
+  if (solver) {
+    const transient::TransientSummary& summary = solver->summary();
+    out << "transient: " << summary.steps << " steps of " << summary.dt << " s (dt_critical " << summary.dt_critical
+        << " s), " << summary.status << ", energy error " << summary.energy_error << ", " << std::setprecision(3)
+        << summary.wall_s << " s\n";
+  }
 
   Stage spectrum_stage{"spectrum", false, "the scene has no spectrum: section", 0.0};
   if (spectrum) {
     Stopwatch clock;
     spectrum_stage.ran = true;
     spectrum_stage.reason = "the scene has a spectrum: section";
-    spectrum->write(scene, directory, solver->probes(), solver->dt(), out);
+    spectrum->write(scene, directory, solver ? solver->probes() : reduced_probes, dt, out);
     spectrum_stage.seconds = clock.seconds();
   } else if (scene.spectrum) {
     Stopwatch clock;

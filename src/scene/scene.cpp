@@ -33,6 +33,20 @@ std::string default_variants(const Values& values, const std::string&) {
   return values.has("crack") ? "[uncracked, open]" : "[uncracked]";
 }
 
+/// `sweep.frequency.from` / `.to`: like transient.excitation.frequency.
+Param sweep_end(const std::string& name, const std::string& doc) {
+  return map_of(name, doc, {
+      number("hz", "Frequency in Hz.").with_unit("Hz").above(0),
+      integer("mode", "Elastic mode number (1 = lowest) the frequency refers to; needs a modal solve.").at_least(1),
+      number("ratio", "Multiple of the mode's frequency.").above(0).defaults_to("1"),
+      choice("of", "Which frequency of the mode: bilinear (default with a crack), uncracked (default without) or "
+                   "open.", {"bilinear", "uncracked", "open"})
+          .defaults_to("bilinear with a crack, else uncracked", [](const Values& values, const std::string&) {
+            return std::string(values.has("crack") ? "bilinear" : "uncracked");
+          }),
+  }).or_scalar_for("hz").required();
+}
+
 Param build_parameters() {
   const auto& faces = mesh::box_face_names();
   // clang-format off
@@ -191,6 +205,22 @@ Param build_parameters() {
                                  "diverging run).").defaults_to("false"),
       choice("variant", "Run the body with its crack (open faces with contact) or with the faces tied.",
              {"open", "uncracked"}).defaults_to("open"),
+      choice("model", "full: the explicit finite-element model (MODEL.md eqs. 24-28); reduced: modes of the "
+                      "variant + residual flexibility at the crack pairs (HYBRID.md sec. 2-3), implicit steps set "
+                      "by accuracy; needs a body held by boundary: conditions.", {"full", "reduced"})
+          .defaults_to("full"),
+      map_of("reduced", "The reduced model (transient.model: reduced).", {
+        integer("modes", "Modes kept; auto: every mode of the variant up to max_frequency.").at_least(1)
+            .or_word("auto").defaults_to("auto"),
+        number("max_frequency", "Highest frequency resolved: modes up to it (modes: auto) and the time step; "
+                                "auto: 4 x spectrum.harmonics (5 without spectrum:) x the excitation frequency.")
+            .with_unit("Hz").above(0).or_word("auto").defaults_to("auto"),
+        integer("steps_per_period", "Time steps per period of the highest retained mode or of max_frequency, "
+                                    "whichever is higher (average-acceleration Newmark: frequency error "
+                                    "(2 pi / n)^2 / 12).").at_least(4).defaults_to("40"),
+        boolean("residual_flexibility", "Keep the static correction of the truncated modes (HYBRID.md sec. 2); "
+                                        "false only to measure what it brings.").defaults_to("true"),
+      }),
       list_of("probes", "Points whose displacement, velocity and acceleration are recorded (nearest node).", {
         text("name", "Name of the probe: letters, digits, _ . - (column prefix, file names, spectrum.json key).")
             .required(),
@@ -253,6 +283,34 @@ Param build_parameters() {
                        "Hann.", {"auto", "rectangular", "hann", "flattop"}).defaults_to("auto"),
       boolean("plots", "PNG plots of each probe's history and spectrum (gnuplot; skipped with a note when "
                        "absent).").defaults_to("true"),
+    }).optional_section(),
+    map_of("sweep", "Frequency sweep run by `crackle sweep` (HYBRID.md sections 4-5): the periodic response of the "
+                    "reduced model to transient.excitation (its load shape and amplitude; its frequency is swept) "
+                    "at transient.probes, with transient.damping and crack.contact.", {
+      map_of("frequency", "The range of excitation frequencies swept.", {
+        sweep_end("from", "Start of the range: a value in Hz, or relative to a mode."),
+        sweep_end("to", "End of the range: a value in Hz, or relative to a mode."),
+      }).required(),
+      integer("harmonics", "H: harmonic orders 0..H of the base frequency (excitation / subharmonic).")
+          .at_least(1).at_most(200).defaults_to("15"),
+      integer("subharmonic", "1, or 2 for period-doubled branches (base frequency = excitation / 2).")
+          .at_least(1).at_most(2).defaults_to("1"),
+      choice("method", "harmonic_balance: pseudo-arclength continuation of the periodic solutions (through "
+                       "folds); stepped_sine: the reduced transient run to steady state at each frequency, up "
+                       "then down, as a lab does.", {"harmonic_balance", "stepped_sine"})
+          .defaults_to("harmonic_balance"),
+      boolean("stability", "Hill's method at every point (harmonic_balance; frictionless contact only).")
+          .defaults_to("true without friction, else false", [](const Values& values, const std::string&) {
+            const bool friction = values.has("crack.contact.friction") && values.number("crack.contact.friction") > 0;
+            return std::string(friction ? "false" : "true");
+          }),
+      integer("points", "harmonic_balance: at least this many points (the continuation step is at most the range "
+                        "/ points); stepped_sine: this many frequencies each way.").at_least(2).at_most(100000)
+          .defaults_to("200"),
+      number("tolerance", "stepped_sine: steady when no harmonic changes by more than this times A1 from one "
+                          "period to the next.").above(0).defaults_to("1e-6"),
+      integer("max_periods", "stepped_sine: periods run at most per frequency (a warning names the frequencies "
+                             "that did not settle).").at_least(2).defaults_to("2000"),
     }).optional_section(),
   });
   // clang-format on
@@ -491,6 +549,13 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
   transient.safety_factor = values.number("transient.safety_factor");
   transient.force_time_step = values.flag("transient.force_time_step");
   transient.variant = values.word("transient.variant");
+  transient.model = values.word("transient.model");
+  if (!values.is_word("transient.reduced.modes")) transient.reduced.modes = values.integer("transient.reduced.modes");
+  if (!values.is_word("transient.reduced.max_frequency")) {
+    transient.reduced.max_frequency_hz = values.number("transient.reduced.max_frequency");
+  }
+  transient.reduced.steps_per_period = values.integer("transient.reduced.steps_per_period");
+  transient.reduced.residual_flexibility = values.flag("transient.reduced.residual_flexibility");
   for (int i = 0; i < values.count("transient.probes"); ++i) {
     const std::string entry = "transient.probes[" + std::to_string(i) + "]";
     ProbeSection probe;
@@ -541,6 +606,20 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
     transient.initial.push_back(initial);
   }
   transient.snapshots = values.integer("transient.snapshots.count");
+  if (transient.model == "reduced") {
+    if (transient.time_step) {
+      values.fail("transient.time_step", "auto with transient.model: reduced (its step is set by "
+                  "transient.reduced.steps_per_period)", format_number(*transient.time_step));
+    }
+    if (!transient.initial.empty()) {
+      values.fail("transient.initial", "no initial fields with transient.model: reduced (not supported yet; "
+                  "start from rest, e.g. with a pulse)", std::to_string(transient.initial.size()) + " entries");
+    }
+    if (transient.snapshots > 0) {
+      values.fail("transient.snapshots.count", "0 with transient.model: reduced (it has no displacement field)",
+                  std::to_string(transient.snapshots));
+    }
+  }
   transient.progress = values.flag("transient.progress");
   if (transient.variant == "open" && !scene.has_crack()) transient.variant = "uncracked";
   return transient;
@@ -560,6 +639,47 @@ SpectrumSection spectrum_from(const Values& values, const Scene& scene) {
   spectrum.ringdown_window_periods = values.integer("spectrum.ringdown.window_periods");
   spectrum.plots = values.flag("spectrum.plots");
   return spectrum;
+}
+
+SweepFrequencySection sweep_end_from(const Values& values, const Scene& scene, const std::string& key) {
+  SweepFrequencySection end;
+  if (exactly_one(values, key, {"hz", "mode"}) == "hz") {
+    end.hz = values.number(key + ".hz");
+  } else {
+    end.mode = values.integer(key + ".mode");
+  }
+  end.ratio = values.number(key + ".ratio");
+  end.of = values.word(key + ".of");
+  if (end.of != "uncracked" && !scene.has_crack()) values.fail(key + ".of", "uncracked (the scene has no crack)", end.of);
+  return end;
+}
+
+SweepSection sweep_from(const Values& values, const Scene& scene) {
+  if (!scene.transient || !scene.transient->excitation || scene.transient->excitation->kind != "harmonic") {
+    values.fail("sweep", "a transient section with a harmonic excitation (its load shape and amplitude are swept)",
+                "none");
+  }
+  if (scene.transient->probes.empty()) values.fail("transient.probes", "at least one probe for the sweep", "none");
+  SweepSection sweep;
+  sweep.from = sweep_end_from(values, scene, "sweep.frequency.from");
+  sweep.to = sweep_end_from(values, scene, "sweep.frequency.to");
+  const bool same_reference = sweep.from.mode == sweep.to.mode && sweep.from.of == sweep.to.of;
+  const double from_value = sweep.from.hz ? *sweep.from.hz : sweep.from.ratio;
+  const double to_value = sweep.to.hz ? *sweep.to.hz : sweep.to.ratio;
+  if (same_reference && from_value == to_value) {
+    values.fail("sweep.frequency.to", "a frequency other than sweep.frequency.from", "the same");
+  }
+  sweep.harmonics = values.integer("sweep.harmonics");
+  sweep.subharmonic = values.integer("sweep.subharmonic");
+  sweep.method = values.word("sweep.method");
+  sweep.stability = values.flag("sweep.stability");
+  if (sweep.stability && scene.contact.friction > 0.0) {
+    values.fail("sweep.stability", "false with friction (Hill's method is frictionless)", "true");
+  }
+  sweep.points = values.integer("sweep.points");
+  sweep.tolerance = values.number("sweep.tolerance");
+  sweep.max_periods = values.integer("sweep.max_periods");
+  return sweep;
 }
 
 Scene scene_from(const Values& values) {
@@ -659,6 +779,7 @@ Scene scene_from(const Values& values) {
   }
   if (values.has("transient")) scene.transient = transient_from(values, scene);
   if (values.has("spectrum")) scene.spectrum = spectrum_from(values, scene);
+  if (values.has("sweep")) scene.sweep = sweep_from(values, scene);
   return scene;
 }
 
@@ -700,9 +821,10 @@ const Param& study_parameters() {
                      "values, or {from, to, steps} for evenly spaced numbers or number lists.", {}).required(),
       choice("mode", "grid: every combination of the values, the first key slowest; zip: the i-th values of every "
                      "key together (lists of equal length).", {"grid", "zip"}).defaults_to("grid"),
-      choice("outputs", "What each case runs: modal -> `crackle modal`, spectrum -> `crackle run` (both, with a "
-                        "`modal:` section: `crackle run` alone, which writes modal.json too).",
-             {"modal", "spectrum"}).list(1, 2).distinct().defaults_to("[modal]"),
+      choice("outputs", "What each case runs: modal -> `crackle modal`, spectrum -> `crackle run`, sweep -> "
+                        "`crackle sweep` (the scene needs a sweep: section); modal with spectrum or sweep and a "
+                        "`modal:` section: not run apart, as those write modal.json too.",
+             {"modal", "spectrum", "sweep"}).list(1, 2).distinct().defaults_to("[modal]"),
   }).optional_section()});
   return table;
 }

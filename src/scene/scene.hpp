@@ -129,6 +129,14 @@ struct ReleaseSection {
 };
 
 /// `transient:` (issue 4).
+/// `transient.reduced:` (the reduced model, HYBRID.md sec. 2-3).
+struct ReducedSection {
+  int modes = 0;                 ///< 0: auto (every mode up to max_frequency)
+  double max_frequency_hz = 0.0; ///< 0: auto
+  int steps_per_period = 40;
+  bool residual_flexibility = true;
+};
+
 struct TransientSection {
   std::optional<ExcitationSection> excitation;
   DampingSection damping;
@@ -138,6 +146,8 @@ struct TransientSection {
   double safety_factor = defaults::kSafetyFactor;
   bool force_time_step = false;
   std::string variant = "open";
+  std::string model = "full";  ///< "full" or "reduced"
+  ReducedSection reduced;
   std::vector<ProbeSection> probes;
   std::vector<InitialSection> initial;
   std::optional<ReleaseSection> release;
@@ -158,6 +168,26 @@ struct SpectrumSection {
   int ringdown_window_periods = 4;
 };
 
+/// One end of `sweep.frequency`: a value in Hz, or a ratio of a mode's frequency.
+struct SweepFrequencySection {
+  std::optional<double> hz;        ///< given in Hz
+  int mode = 0;                    ///< > 0: ratio * f(mode) of `of`
+  double ratio = 1.0;
+  std::string of = "uncracked";    ///< bilinear | uncracked | open
+};
+
+/// `sweep:` (frequency sweeps by harmonic balance, HYBRID.md §4-5), run by `crackle sweep`.
+struct SweepSection {
+  SweepFrequencySection from, to;
+  int harmonics = 15;              ///< H: orders 0..H of the base frequency
+  int subharmonic = 1;             ///< nu: 1, or 2 for period-doubled branches
+  std::string method = "harmonic_balance";  ///< harmonic_balance | stepped_sine
+  bool stability = true;           ///< Hill's method at every point (harmonic_balance)
+  int points = 200;                ///< at least this many points (harmonic_balance), or frequencies each way (stepped_sine)
+  double tolerance = 1e-6;         ///< stepped_sine: steady when no harmonic changes more than this x A1 over a period
+  int max_periods = 2000;          ///< stepped_sine: periods per frequency at most
+};
+
 struct Scene {
   std::string file;  ///< path the scene was read from (or a name for in-memory scenes)
   mesh::BoxSpec box;
@@ -175,6 +205,7 @@ struct Scene {
   bool has_modal_section = false;
   std::optional<TransientSection> transient;
   std::optional<SpectrumSection> spectrum;
+  std::optional<SweepSection> sweep;
 };
 
 struct Param;

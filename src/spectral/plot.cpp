@@ -127,6 +127,11 @@ fs::path find_executable(const std::string& name) {
   return {};
 }
 
+PlotResult plot_script(const fs::path& png, const std::string& data, const std::string& script_body,
+                       const PlotOptions& options) {
+  return draw(png, data, script_body, options);
+}
+
 bool gnuplot_available(const PlotOptions& options) {
   return !find_executable(options.gnuplot).empty();
 }

@@ -63,4 +63,9 @@ PlotResult plot_ringdown_envelope(const std::filesystem::path& png, const Ringdo
 PlotResult plot_frf(const std::filesystem::path& png, const FrequencyResponse& frf,
                     const std::vector<double>& reference_hz, const PlotOptions& options);
 
+/// Any plot: writes `data` as `<name>.dat` and a script of `script_body` (after the terminal,
+/// output, title and grid lines) as `<name>.gp`, and runs gnuplot in the PNG's folder.
+PlotResult plot_script(const std::filesystem::path& png, const std::string& data, const std::string& script_body,
+                       const PlotOptions& options);
+
 }  // namespace crackle::spectral

@@ -8,7 +8,8 @@
 ///     crack.region.z: {from: [0.009, 0.01], to: [0.005, 0.01], steps: 5}  # a range
 ///     modal.mass: [consistent, lumped]                                      # a list of values
 ///   mode: grid                  # grid (cartesian product, first key slowest) | zip
-///   outputs: [modal, spectrum]  # what each case runs: modal -> `crackle modal`, spectrum -> `crackle run`
+///   outputs: [modal, spectrum]  # what each case runs: modal -> `crackle modal`, spectrum -> `crackle run`,
+///                               # sweep -> `crackle sweep`
 ///                               # (both: `run` alone when the scene has modal:, it writes modal.json)
 /// ```
 /// The scene loader does not know `study:`; the section is parsed here, with the same
@@ -35,7 +36,7 @@ struct VariedKey {
 struct StudySpec {
   std::vector<VariedKey> vary;
   StudyMode mode = StudyMode::grid;
-  std::vector<std::string> outputs = {"modal"};  ///< subset of "modal", "spectrum", in this order
+  std::vector<std::string> outputs = {"modal"};  ///< subset of "modal", "spectrum", "sweep", in this order
   int line = -1;                                 ///< line of `study:`; -1 when absent
 };
 

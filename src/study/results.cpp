@@ -188,6 +188,27 @@ json summarize_spectrum(const json& spectrum) {
   return summary;
 }
 
+json summarize_sweep(const json& sweep) {
+  json summary = {{"points", number_field(sweep, {"points"})}};
+  summary["completed"] = sweep.is_object() && sweep.value("completed", false);
+  const json events = sweep.is_object() ? sweep.value("events", json::array()) : json::array();
+  summary["events"] = events.is_array() ? events.size() : 0;
+  summary["first_event_hz"] = events.is_array() && !events.empty() ? number_field(events[0], {"frequency_hz"}) : json();
+  json probes = json::object();
+  if (sweep.is_object() && sweep.contains("probes") && sweep["probes"].is_object()) {
+    for (const auto& [name, probe] : sweep["probes"].items()) {
+      json kept = json::object();
+      for (const char* peak : {"peak_a1", "peak_a2_over_a1", "peak_a3_over_a1"}) {
+        const json entry = probe.is_object() ? probe.value(peak, json()) : json();
+        kept[peak] = {{"frequency_hz", number_field(entry, {"frequency_hz"})}, {"value", number_field(entry, {"value"})}};
+      }
+      probes[name] = kept;
+    }
+  }
+  summary["probes"] = probes;
+  return summary;
+}
+
 json read_case_outputs(const fs::path& case_directory, const std::vector<std::string>& outputs,
                        std::string& problem) {
   json kept = json::object();
@@ -204,6 +225,12 @@ json read_case_outputs(const fs::path& case_directory, const std::vector<std::st
   if (want_spectrum) {
     if (read_json(case_directory / "spectrum.json", document, missing))
       kept["spectrum"] = summarize_spectrum(document);
+    else if (problem.empty())
+      problem = missing;
+  }
+  if (std::count(outputs.begin(), outputs.end(), "sweep") > 0) {
+    if (read_json(case_directory / "sweep.json", document, missing))
+      kept["sweep"] = summarize_sweep(document);
     else if (problem.empty())
       problem = missing;
   }
@@ -227,6 +254,39 @@ json read_finished_case(const fs::path& case_directory, const std::string& hash)
 int StudyTable::column(const std::string& header) const {
   const auto found = std::find(headers.begin(), headers.end(), header);
   return found == headers.end() ? -1 : static_cast<int>(found - headers.begin());
+}
+
+/// Columns of sweep.json's summary: points, events, the first event, per probe the peaks.
+template <class Add>
+void add_sweep_columns(const std::vector<json>& cases, std::string& kind, const Add& add) {
+  std::set<std::string> names;
+  bool any = false;
+  for (const json& c : cases) {
+    if (!c.is_object() || !c.contains("sweep")) continue;
+    any = true;
+    for (const auto& [name, probe] : c["sweep"].value("probes", json::object()).items()) names.insert(name);
+  }
+  if (!any) return;
+  const auto field = [](const char* key) {
+    return [key](const json& c) { return c.contains("sweep") ? number_cell(c["sweep"].value(key, json())) : Cell{}; };
+  };
+  kind = "sweep";
+  add("sweep.points [-]", field("points"));
+  add("sweep.events [-]", field("events"));
+  add("sweep.first_event [Hz]", field("first_event_hz"));
+  for (const std::string& name : names) {
+    for (const auto& [peak, label] : std::vector<std::pair<std::string, std::string>>{
+             {"peak_a1", "peak_A1"}, {"peak_a2_over_a1", "peak_A2/A1"}, {"peak_a3_over_a1", "peak_A3/A1"}}) {
+      const auto entry = [name, peak = peak](const json& c, const char* what) -> Cell {
+        if (!c.contains("sweep")) return Cell{};
+        const json probe = c["sweep"].value("probes", json::object()).value(name, json::object());
+        return number_cell(probe.value(peak, json::object()).value(what, json()));
+      };
+      add(name + ".sweep." + label + " [" + (peak == "peak_a1" ? "m" : "-") + "]",
+          [entry](const json& c) { return entry(c, "value"); });
+      add(name + ".sweep." + label + " at [Hz]", [entry](const json& c) { return entry(c, "frequency_hz"); });
+    }
+  }
 }
 
 StudyTable build_table(const StudyPlan& plan, const std::vector<json>& cases) {
@@ -346,6 +406,8 @@ StudyTable build_table(const StudyPlan& plan, const std::vector<json>& cases) {
       });
     }
   }
+
+  add_sweep_columns(cases, kind, add);
 
   for (std::size_t i = 0; i < plan.cases.size(); ++i) {
     const StudyCase& study_case = plan.cases[i];

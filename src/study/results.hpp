@@ -29,6 +29,10 @@ nlohmann::json summarize_modal(const nlohmann::json& modal);
 /// The summary of the spectrum.json document (see the file comment).
 nlohmann::json summarize_spectrum(const nlohmann::json& spectrum);
 
+/// The summary of the sweep.json document: points, completed, folds and bifurcations (count and
+/// the first one's frequency), per probe the peaks of A1 and A2/A1 and A3/A1 (frequency, value).
+nlohmann::json summarize_sweep(const nlohmann::json& sweep);
+
 /// case.json of a finished case if it exists, reads, and belongs to this scene (hash); else null.
 nlohmann::json read_finished_case(const std::filesystem::path& case_directory, const std::string& hash);
 

@@ -256,11 +256,13 @@ Job StudyRun::case_job(int index) {
   // `crackle run` writes modal.json itself when the scene has a modal: section (the same variants,
   // at least as many modes), so a case that asks for both runs only `run`: one modal solve less.
   const auto& outputs = plan_.spec.outputs;
+  // `crackle sweep` runs the same modal stage.
   const bool run_writes_modal =
-      study_case.has_modal_section && std::count(outputs.begin(), outputs.end(), "spectrum") > 0;
+      study_case.has_modal_section && (std::count(outputs.begin(), outputs.end(), "spectrum") > 0 ||
+                                       std::count(outputs.begin(), outputs.end(), "sweep") > 0);
   for (const std::string& output : outputs) {
     if (output == "modal" && run_writes_modal) continue;
-    const std::string command = output == "spectrum" ? "run" : "modal";
+    const std::string command = output == "spectrum" ? "run" : output == "sweep" ? "sweep" : "modal";
     std::vector<std::string> argv = {executable_.string(), command, scene.string(), "-o",
                                      job.folder.string()};
     if (options_.modal_cache) {

@@ -112,7 +112,7 @@ TEST(StudyPlan, MessagesNameFileLineAndPath) {
   EXPECT_EQ(study("  vary: {material.nu: [0.2]}\n  mode: cartesian\n"),
             "beam.yaml:17: study.mode: expected one of grid, zip, got 'cartesian'");
   EXPECT_EQ(study("  vary: {material.nu: [0.2]}\n  outputs: [modal, spectra]\n"),
-            "beam.yaml:17: study.outputs[1]: expected one of modal, spectrum, got 'spectra' (did you mean "
+            "beam.yaml:17: study.outputs[1]: expected one of modal, spectrum, sweep, got 'spectra' (did you mean "
             "'spectrum'?)");
   EXPECT_EQ(study("  mode: zip\n"),
             "beam.yaml:15: study.vary: expected a map from scene key paths (e.g. crack.region.z) to lists of "

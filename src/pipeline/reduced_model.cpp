@@ -1,0 +1,124 @@
+#include "pipeline/reduced_model.hpp"
+
+#include "contact/contact.hpp"
+#include "core/errors.hpp"
+#include "core/resources.hpp"
+#include "reduced/reduction.hpp"
+#include "transient/damping.hpp"
+#include "transient/excitation.hpp"
+
+namespace crackle::pipeline {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// The excitation's load shape for a unit total force (the amplitude scales it afterwards).
+fem::LoadShape unit_load(const scene::Scene& scene, const Model& model, const fem::System& system) {
+  if (!scene.transient->excitation) return fem::LoadShape{"none", {}, {}};
+  const scene::ExcitationSection& excitation = *scene.transient->excitation;
+  fem::LoadPlacement placement;
+  placement.name = "transient.excitation";
+  if (!excitation.face.empty()) placement.faces = model.mesh.face_sets.at(excitation.face);
+  if (!excitation.group.empty()) placement.nodes = model.mesh.node_sets.at(excitation.group);
+  if (excitation.point) placement.nodes = {transient::nearest_node(model.mesh, *excitation.point)};
+  placement.total = Vec3::Unit(excitation.direction);
+  return system.load_shape(placement);
+}
+
+double max_frequency(const scene::Scene& scene, double excitation_frequency_hz) {
+  const scene::ReducedSection& reduced = scene.transient->reduced;
+  if (reduced.max_frequency_hz > 0.0) return reduced.max_frequency_hz;
+  const int harmonics = scene.spectrum ? scene.spectrum->harmonics : kDefaultHarmonics;
+  if (excitation_frequency_hz > 0.0) return kAutoFrequencyFactor * harmonics * excitation_frequency_hz;
+  if (reduced.modes > 0) return 0.0;  // the time step follows the highest retained mode
+  throw InputError(scene.file + ": transient.reduced.max_frequency: expected a frequency in Hz (or "
+                   "transient.reduced.modes) without a harmonic excitation, got auto");
+}
+
+/// Damping from alpha/beta or a ratio at a frequency in Hz (a ratio at a mode: left to the caller).
+transient::RayleighDamping damping_of(const scene::Scene& scene) {
+  const scene::DampingSection& damping = scene.transient->damping;
+  if (!damping.ratio) return {damping.alpha, damping.beta};
+  if (!damping.at_hz) return {};
+  const double omega = 2.0 * kPi * *damping.at_hz;
+  return damping.type == "stiffness" ? transient::stiffness_proportional_damping(*damping.ratio, omega)
+                                     : transient::mass_proportional_damping(*damping.ratio, omega);
+}
+
+/// The cached reduction when it holds the modes asked.
+std::optional<reduced::Reduction> cached(const std::filesystem::path& directory, std::uint64_t key, int modes,
+                                         double max_frequency_hz) {
+  if (directory.empty()) return std::nullopt;
+  std::optional<reduced::Reduction> reduction = reduced::load_cached_reduction(directory, key);
+  if (!reduction) return std::nullopt;
+  const bool enough = modes > 0 ? reduction->n_computed_modes() >= modes
+                                : reduction->modes_up_to(max_frequency_hz).has_value();
+  if (!enough) return std::nullopt;
+  return reduction;
+}
+
+}  // namespace
+
+ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, double excitation_frequency_hz,
+                                 const std::filesystem::path& cache_directory) {
+  if (!scene.transient) throw InputError(scene.file + ": transient: expected a section for the reduced model");
+  Stopwatch clock;
+  const scene::TransientSection& section = *scene.transient;
+  const bool with_crack = section.variant == "open" && model.mesh.has_crack();
+  const fem::System& system = *model.system(with_crack ? mesh::Variant::open : mesh::Variant::uncracked);
+  const contact::ContactOptions contact_options = scene_contact_options(scene);
+  const bool friction = with_crack && contact_options.friction_coefficient > 0.0;
+
+  ReducedModel result;
+  std::vector<Index> probe_nodes;
+  for (const scene::ProbeSection& probe : section.probes) {
+    probe_nodes.push_back(transient::nearest_node(model.mesh, probe.point));
+    for (int c = 0; c < 3; ++c) result.output_names.push_back(probe.name + " u_" + axis_name(c));
+  }
+  const fem::LoadShape load = unit_load(scene, model, system);
+  result.max_frequency_hz = max_frequency(scene, excitation_frequency_hz);
+
+  reduced::ReductionOptions options;
+  options.modes = section.reduced.modes;
+  options.max_frequency_hz = result.max_frequency_hz;
+  options.friction = friction;
+  const std::uint64_t key = reduced::reduction_key(system, probe_nodes, load, friction);
+  std::optional<reduced::Reduction> reduction = cached(cache_directory, key, options.modes, options.max_frequency_hz);
+  result.from_cache = reduction.has_value();
+  if (!reduction) {
+    reduction = reduced::compute_reduction(system, options, probe_nodes, load);
+    if (!cache_directory.empty()) reduced::store_cached_reduction(cache_directory, key, *reduction);
+  }
+  Index modes = reduction->n_computed_modes();
+  if (options.modes > 0) modes = options.modes;
+  else if (const std::optional<Index> up_to = reduction->modes_up_to(options.max_frequency_hz)) modes = *up_to;
+  const double amplitude = section.excitation ? section.excitation->amplitude : 0.0;
+  result.system = reduced::reduced_system(*reduction, modes, amplitude);
+  if (!section.reduced.residual_flexibility) {
+    // Modes only: pairs and outputs see no static correction (a massless boundary needs R > 0, so the
+    // pairs keep a tiny compliance of 1e-9 of their static one).
+    result.system.residual = 1e-9 * reduction->pair_static.diagonal().asDiagonal();
+    result.system.load_residual.setZero();
+    result.system.output_residual_pairs.setZero();
+    result.system.output_residual_load.setZero();
+  }
+  if (with_crack) {
+    const contact::PenaltyChoice penalty = contact::choose_penalty(model.mesh, model.materials, contact_options);
+    result.system.normal_penalty = penalty.normal_penalty;
+    result.system.tangential_penalty = penalty.tangential_penalty;
+    result.system.friction_coefficient = contact_options.friction_coefficient;
+    result.system.initial_gap.setConstant(contact_options.initial_gap);
+  }
+  const transient::RayleighDamping damping = damping_of(scene);
+  result.system.rayleigh_alpha = damping.alpha;
+  result.system.rayleigh_beta = damping.beta;
+  result.modes = static_cast<int>(modes);
+  result.pairs = result.system.n_pairs();
+  result.computed_modes = static_cast<int>(reduction->n_computed_modes());
+  result.modes_s = reduction->modes_s;
+  result.flexibility_s = reduction->flexibility_s;
+  result.setup_s = clock.seconds();
+  return result;
+}
+
+}  // namespace crackle::pipeline

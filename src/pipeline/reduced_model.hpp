@@ -1,0 +1,46 @@
+#pragma once
+/// \file The scene's reduced model (HYBRID.md §2): the pipeline-level builder over reduced/reduction.hpp,
+/// shared by the reduced transient of `crackle run` and by `crackle sweep`. The expensive part (modes,
+/// static solves) is cached by fingerprint in the --modal-cache folder, so a study over excitation
+/// frequency, amplitude or damping computes it once.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "pipeline/model.hpp"
+#include "reduced/system.hpp"
+#include "scene/scene.hpp"
+
+namespace crackle::pipeline {
+
+/// Factor of the automatic transient.reduced.max_frequency: kAutoFrequencyFactor x spectrum.harmonics
+/// (kDefaultHarmonics without spectrum:) x the excitation frequency.
+inline constexpr double kAutoFrequencyFactor = 4.0;
+inline constexpr int kDefaultHarmonics = 5;
+
+/// The scene's reduced model (HYBRID.md §2) of the open variant: modes, residual flexibility at the
+/// crack pairs, the excitation's load shape (its amplitude included: a(t) is the dimensionless signal)
+/// and the probes (output row 3 p + c = probe p, component c).
+struct ReducedModel {
+  reduced::ReducedSystem system;
+  std::vector<std::string> output_names;  ///< "tip u_x", "tip u_y", ... per output row
+  double max_frequency_hz = 0.0;
+  int modes = 0;
+  Index pairs = 0;
+  double setup_s = 0.0;
+  bool from_cache = false;
+  double modes_s = 0.0;        ///< eigen-solve time of the reduction (when computed, or when it was cached)
+  double flexibility_s = 0.0;  ///< factorisation and static solves of the reduction
+  int computed_modes = 0;      ///< modes in the reduction (>= modes: a cached one may hold more)
+};
+
+/// Builds (or reads from `cache_directory`, when not empty) the reduced model of the scene's
+/// transient variant (open with a crack: pairs and the contact of crack.contact, penalty auto via
+/// contact::choose_penalty; uncracked: no pairs). Damping: alpha and beta, or a ratio at a frequency
+/// in Hz; a ratio at a mode leaves alpha = beta = 0 for the caller (it needs the uncracked modes).
+/// `excitation_frequency_hz` (0 for a pulse) sets the automatic max_frequency. InputError for a free
+/// body, a scene without transient:, or an automatic max_frequency without a harmonic excitation.
+ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, double excitation_frequency_hz,
+                                 const std::filesystem::path& cache_directory);
+
+}  // namespace crackle::pipeline

@@ -1,0 +1,40 @@
+#pragma once
+/// \file Stages shared by the commands of the pipeline (`crackle run`, `crackle sweep`): the modal
+/// stage that runs only when a key refers to a mode, and the frequency of a mode it found.
+#include <filesystem>
+#include <iosfwd>
+#include <optional>
+#include <string>
+
+#include "modal/modal.hpp"
+#include "pipeline/model.hpp"
+#include "scene/scene.hpp"
+#include "transient/damping.hpp"
+
+namespace crackle::pipeline {
+
+/// One line of run.json / sweep.json: a stage, whether it ran, why, and its time.
+struct Stage {
+  std::string name;
+  bool ran = false;
+  std::string reason;
+  double seconds = 0.0;
+};
+
+/// Frequency [Hz] of elastic mode `mode` (1-based) of the given kind (bilinear, uncracked, open)
+/// from a modal result. InputError naming `key` when that mode was not computed or not paired.
+double mode_frequency(const modal::ModalResult& result, int mode, const std::string& of, const std::string& key);
+
+/// Rayleigh damping of transient.damping: a ratio at a frequency (or a mode of `modes`), or alpha and beta.
+transient::RayleighDamping scene_damping(const scene::Scene& scene, const std::optional<modal::ModalResult>& modes);
+
+/// The modal stage: the variants the scene needs (a mode referred to by transient.excitation,
+/// transient.damping or sweep.frequency, or a modal: section), with modal.json etc. written to
+/// `output_directory`; std::nullopt (and `stage.reason` says why) when nothing needs modes.
+/// Needs a transient: section.
+std::optional<modal::ModalResult> run_modal_stage(const scene::Scene& scene, const Model& model,
+                                                  const std::filesystem::path& output_directory,
+                                                  const std::filesystem::path& modal_cache, Stage& stage,
+                                                  std::ostream& out);
+
+}  // namespace crackle::pipeline

@@ -1,0 +1,113 @@
+#pragma once
+/// \file `crackle sweep`: frequency response curves of the reduced model (HYBRID.md §4-5), by
+/// harmonic balance with pseudo-arclength continuation and Hill stability, or by a stepped sine
+/// (the reduced transient run to steady state at each frequency, up then down, as a lab does).
+///
+/// The pieces work on a `reduced::ReducedSystem` and the scene's `sweep:` section, so that tests
+/// can drive them with a system written by hand; `run_sweep_command` wires the scene, the modal
+/// stage and the reduced model to them and writes sweep.csv, sweep.json and one PNG per probe.
+///
+/// **Conventions.** Frequencies in the files are in Hz, the solvers' in rad/s. The load is
+/// a(t) = cos(2 pi f t) times the excitation's shape and amplitude; a probe's order-k response is
+/// A_k cos(2 pi k f t + phi_k) (phases relative to the load, lagging < 0).
+#include <filesystem>
+#include <functional>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "io/csv.hpp"
+#include "reduced/system.hpp"
+#include "scene/scene.hpp"
+#include "spectral/plot.hpp"
+#include "sweep/harmonic_balance.hpp"
+
+namespace crackle::pipeline {
+
+/// A probe of the sweep: its name, the analysed displacement component and its output row.
+struct SweepProbe {
+  std::string name;
+  int component = 2;  ///< 0, 1, 2 for x, y, z
+  Index row = 0;      ///< row of the reduced system's outputs (3 p + component)
+};
+
+/// The sweep of a scene with its frequency range resolved.
+struct SweepSettings {
+  scene::SweepSection section;
+  double from_hz = 0.0, to_hz = 0.0;  ///< excitation frequencies [Hz]
+  double bilinear_hz = 0.0;           ///< f_b of the mode the range refers to (0: given in Hz)
+  std::vector<SweepProbe> probes;
+};
+
+/// The probes of the scene's transient section: the analysed component (the excitation direction
+/// unless given), row 3 p + component.
+std::vector<SweepProbe> sweep_probes(const scene::Scene& scene);
+
+/// One solution point.
+struct SweepPoint {
+  sweep::Solution solution;     ///< omega, subharmonic, outputs (probe rows only), iterations, residual
+  bool stability_known = false; ///< Hill's method ran
+  bool stable = true;
+  bool fold = false;            ///< a fold lies between the previous point and this one
+  bool period_doubling = false; ///< a multiplier crossed -1 there
+  int direction = 1;            ///< stepped_sine: +1 up, -1 down; harmonic_balance: +1
+  int periods = 0;              ///< stepped_sine: periods run to steady state
+  double frequency_hz() const;
+};
+
+/// A fold or bifurcation found along the branch.
+struct SweepEvent {
+  std::string kind;        ///< fold, period_doubling, neimark_sacker, stability_change
+  double frequency_hz = 0.0;  ///< interpolated between the two points around it
+  std::size_t point = 0;   ///< index of the point after it
+};
+
+struct SweepResult {
+  std::vector<SweepPoint> points;
+  std::vector<SweepEvent> events;
+  std::vector<std::string> warnings;  ///< H-convergence, unsettled frequencies, an unfinished branch
+  double max_top_share = 0.0;         ///< largest top-harmonic share of the gap response
+  double solve_s = 0.0;               ///< seconds spent in the solver
+  bool completed = true;              ///< the branch reached the end of the range
+};
+
+/// Called after each point: points so far, and the fraction of the range covered.
+using SweepProgress = std::function<void(const SweepResult&, double fraction)>;
+
+/// Harmonic-balance sweep: continuation from from_hz to to_hz (started from the linear solution).
+SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const SweepSettings& settings,
+                                   const SweepProgress& progress = SweepProgress());
+
+/// Stepped sine: `points` frequencies up, then the same down, each run from the previous state until
+/// no harmonic of any probe changes by more than `tolerance` A1 over a base period.
+SweepResult stepped_sine_sweep(const reduced::ReducedSystem& system, const SweepSettings& settings,
+                               const SweepProgress& progress = SweepProgress());
+
+/// sweep.csv: one row per point (units in the header).
+io::CsvTable sweep_table(const SweepResult& result, const SweepSettings& settings);
+
+/// sweep.json: settings, the events, warnings and a per-probe summary (peaks of A2/A1, A3/A1).
+nlohmann::json sweep_json(const SweepResult& result, const SweepSettings& settings);
+
+/// Response curve of one probe: A1, A2, A3 (and A1/2 with subharmonic 2) against frequency, log y,
+/// unstable parts dashed, f_b/2, f_b/3 and f_b marked when known.
+spectral::PlotResult plot_sweep(const std::filesystem::path& png, const SweepResult& result,
+                                const SweepSettings& settings, std::size_t probe,
+                                const spectral::PlotOptions& options = spectral::PlotOptions());
+
+struct SweepCommandOptions {
+  std::string scene_path;
+  std::vector<std::string> overrides;  ///< `key.path=value`
+  std::filesystem::path output_directory = "out";
+  std::filesystem::path modal_cache;   ///< folder sharing the uncracked solve between runs
+  bool progress = true;                ///< progress line on stderr
+};
+
+/// `crackle sweep`: modal stage (for mode-relative ranges) -> reduced model -> sweep; writes
+/// sweep.csv, sweep.json and sweep_<probe>.png. Progress goes to `progress` (stderr), the summary
+/// to `out`.
+void run_sweep_command(const SweepCommandOptions& options, std::ostream& out, std::ostream& progress);
+
+}  // namespace crackle::pipeline

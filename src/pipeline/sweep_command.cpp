@@ -1,0 +1,126 @@
+/// \file `crackle sweep`: scene -> model -> modal stage (only for mode-relative ranges or a modal:
+/// section) -> reduced model -> harmonic balance or stepped sine -> sweep.csv, sweep.json, plots.
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+
+#include "core/errors.hpp"
+#include "core/resources.hpp"
+#include "io/csv.hpp"
+#include "io/files.hpp"
+#include "pipeline/commands.hpp"
+#include "pipeline/reduced_model.hpp"
+#include "pipeline/stages.hpp"
+#include "pipeline/sweep.hpp"
+
+namespace crackle::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// One end of the range in Hz; the bilinear frequency of its mode in `bilinear_hz` when it names one.
+double end_frequency(const scene::Scene& scene, const scene::SweepFrequencySection& end,
+                     const std::optional<modal::ModalResult>& modes, const std::string& key, double& bilinear_hz) {
+  if (end.hz) return *end.hz;
+  const std::string where = scene.file + ": " + key + ".mode";
+  if (bilinear_hz == 0.0 && scene.has_crack()) bilinear_hz = mode_frequency(*modes, end.mode, "bilinear", where);
+  return end.ratio * mode_frequency(*modes, end.mode, end.of, where);
+}
+
+SweepSettings resolve_settings(const scene::Scene& scene, const std::optional<modal::ModalResult>& modes) {
+  SweepSettings settings;
+  settings.section = *scene.sweep;
+  settings.from_hz = end_frequency(scene, scene.sweep->from, modes, "sweep.frequency.from", settings.bilinear_hz);
+  settings.to_hz = end_frequency(scene, scene.sweep->to, modes, "sweep.frequency.to", settings.bilinear_hz);
+  if (settings.from_hz == settings.to_hz) {
+    throw InputError(scene.file + ": sweep.frequency: expected two different frequencies, got " +
+                     format_number(settings.from_hz) + " Hz for both");
+  }
+  settings.probes = sweep_probes(scene);
+  return settings;
+}
+
+/// A progress line on stderr, rewritten in place.
+SweepProgress progress_line(std::ostream& progress, bool enabled) {
+  if (!enabled) return SweepProgress();
+  return [&progress](const SweepResult& result, double fraction) {
+    const SweepPoint& point = result.points.back();
+    progress << "\rsweep: " << std::setw(5) << result.points.size() << " points, " << std::setprecision(6)
+             << point.frequency_hz() << " Hz, " << std::setw(3) << std::lround(100.0 * std::clamp(fraction, 0.0, 1.0))
+             << " %, " << (point.stability_known ? (point.stable ? "stable  " : "unstable") : "") << std::flush;
+  };
+}
+
+void write_outputs(const fs::path& directory, const SweepResult& result, const SweepSettings& settings,
+                   nlohmann::json document, std::ostream& out) {
+  io::write_csv(directory / "sweep.csv", sweep_table(result, settings));
+  io::write_json(directory / "sweep.json", document);
+  for (std::size_t p = 0; p < settings.probes.size(); ++p) {
+    spectral::PlotOptions plot;
+    plot.title = settings.probes[p].name + " u_" + axis_name(settings.probes[p].component) + ", " +
+                 settings.section.method;
+    const spectral::PlotResult drawn = plot_sweep(directory / ("sweep_" + settings.probes[p].name + ".png"), result,
+                                                  settings, p, plot);
+    if (!drawn.written) out << "note: no plot (" << drawn.note << ")\n";
+  }
+}
+
+void print_summary(const SweepResult& result, const nlohmann::json& document, std::ostream& out) {
+  out << "sweep: " << result.points.size() << " points in " << std::setprecision(3) << result.solve_s << " s";
+  out << (result.completed ? "" : " (incomplete)") << "\n";
+  for (const SweepEvent& event : result.events) out << "  " << event.kind << " at " << event.frequency_hz << " Hz\n";
+  for (const auto& [name, probe] : document["probes"].items()) {
+    out << "  " << name << ": A2/A1 peaks at " << std::setprecision(6)
+        << probe["peak_a2_over_a1"].value("frequency_hz", 0.0) << " Hz ("
+        << probe["peak_a2_over_a1"].value("value", 0.0) << ")\n";
+  }
+  for (const std::string& warning : result.warnings) out << "warning: " << warning << "\n";
+}
+
+}  // namespace
+
+void run_sweep_command(const SweepCommandOptions& options, std::ostream& out, std::ostream& progress) {
+  Stopwatch total;
+  const scene::Scene scene = scene::load_scene(options.scene_path, parse_overrides(options.overrides));
+  if (!scene.sweep) {
+    throw InputError(scene.file + ": sweep: expected a sweep section for crackle sweep (frequency: {from, to}), got none");
+  }
+  const fs::path& directory = options.output_directory;
+  io::ensure_directory(directory);
+  const Model model = build_model(scene);
+  Stage modal_stage{"modal", false, "", 0.0};
+  const std::optional<modal::ModalResult> modes =
+      run_modal_stage(scene, model, directory, options.modal_cache, modal_stage, out);
+  const SweepSettings settings = resolve_settings(scene, modes);
+
+  Stopwatch reduction_clock;
+  ReducedModel reduced = build_reduced_model(scene, model, std::max(settings.from_hz, settings.to_hz),
+                                                   options.modal_cache);
+  const transient::RayleighDamping damping = scene_damping(scene, modes);
+  reduced.system.rayleigh_alpha = damping.alpha;
+  reduced.system.rayleigh_beta = damping.beta;
+  Stage reduction_stage{"reduction", true, reduced.from_cache ? "reduced model read from the cache" : "built",
+                        reduction_clock.seconds()};
+  const SweepProgress line = progress_line(progress, options.progress);
+  const SweepResult result = settings.section.method == "stepped_sine"
+                                 ? stepped_sine_sweep(reduced.system, settings, line)
+                                 : harmonic_balance_sweep(reduced.system, settings, line);
+  if (options.progress) progress << "\n";
+
+  nlohmann::json document = sweep_json(result, settings);
+  nlohmann::json stages = nlohmann::json::array();
+  for (const Stage& stage : {modal_stage, reduction_stage, Stage{"sweep", true, settings.section.method, result.solve_s}})
+    stages.push_back({{"name", stage.name}, {"ran", stage.ran}, {"reason", stage.reason}, {"seconds", stage.seconds}});
+  const Index unknowns = reduced.system.n_rows() * (2 * settings.section.harmonics + 1);
+  document["scene"] = scene.file;
+  document["stages"] = stages;
+  document["model"] = {{"modes", reduced.modes}, {"pairs", reduced.pairs}, {"pair_rows", reduced.system.n_rows()},
+                       {"unknowns", unknowns}, {"max_frequency_hz", reduced.max_frequency_hz}};
+  document["seconds_per_point"] = result.points.empty() ? 0.0 : result.solve_s / double(result.points.size());
+  document["wall_s"] = total.seconds();
+  write_outputs(directory, result, settings, document, out);
+  print_summary(result, document, out);
+  out << "wrote " << (directory / "sweep.json").string() << "\n";
+}
+
+}  // namespace crackle::pipeline

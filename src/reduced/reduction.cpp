@@ -1,0 +1,322 @@
+#include "reduced/reduction.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+
+#include <Eigen/Geometry>
+
+#include "core/errors.hpp"
+#include "core/resources.hpp"
+#include "io/files.hpp"
+#include "modal/cholmod_factor.hpp"
+#include "modal/modal.hpp"
+
+namespace crackle::reduced {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+/// Modes asked in the first eigen-solve of an automatic count; doubled until the highest is above the target.
+constexpr int kFirstModeCount = 12;
+constexpr char kMagic[8] = {'C', 'R', 'K', 'R', 'E', 'D', 'U', '1'};
+
+/// One pair row of B: weights over free DOFs (sparse, at most 6 entries).
+struct Row {
+  std::vector<Index> free;
+  std::vector<double> weight;
+  double dot(const VectorX& x) const {
+    double sum = 0.0;
+    for (std::size_t k = 0; k < free.size(); ++k) sum += weight[k] * x[free[k]];
+    return sum;
+  }
+  void add_to(VectorX& x, double scale) const {
+    for (std::size_t k = 0; k < free.size(); ++k) x[free[k]] += scale * weight[k];
+  }
+};
+
+/// Rows of B (pairs x directions) then of C (outputs), over the free DOFs.
+void build_rows(const fem::System& system, bool friction, const std::vector<Index>& output_nodes,
+                std::vector<Row>& pair_rows, std::vector<Row>& output_rows, VectorX& areas) {
+  const fem::Constraints& constraints = system.constraints();
+  const mesh::DofMap& dofs = system.dofs();
+  auto add_entry = [&](Row& row, Index node, int c, double w) {
+    const Index free = constraints.free_index[dofs.dof(node, c)];
+    if (free >= 0 && w != 0.0) {
+      row.free.push_back(free);
+      row.weight.push_back(w);
+    }
+  };
+  const std::vector<mesh::CrackPair> pairs =
+      system.variant() == mesh::Variant::open ? split_pairs(system.mesh()) : std::vector<mesh::CrackPair>{};
+  areas.resize(static_cast<Index>(pairs.size()));
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const mesh::CrackPair& pair = pairs[i];
+    areas[static_cast<Index>(i)] = pair.area;
+    std::vector<Vec3> directions = {pair.normal.normalized()};
+    if (friction) {
+      const auto [t1, t2] = pair_tangents(directions[0]);
+      directions.push_back(t1);
+      directions.push_back(t2);
+    }
+    for (const Vec3& d : directions) {
+      Row row;
+      for (int c = 0; c < 3; ++c) {
+        add_entry(row, pair.minus, c, d[c]);
+        add_entry(row, pair.plus, c, -d[c]);
+      }
+      pair_rows.push_back(std::move(row));
+    }
+  }
+  for (Index node : output_nodes) {
+    for (int c = 0; c < 3; ++c) {
+      Row row;
+      add_entry(row, node, c, 1.0);
+      output_rows.push_back(std::move(row));
+    }
+  }
+}
+
+SparseMatrix diagonal(const VectorX& values) {
+  SparseMatrix matrix(values.size(), values.size());
+  matrix.reserve(Eigen::VectorXi::Ones(values.size()));
+  for (Index i = 0; i < values.size(); ++i) matrix.insert(i, i) = values[i];
+  matrix.makeCompressed();
+  return matrix;
+}
+
+/// Lowest modes of (K, M): a fixed count, or every mode up to `target_hz` (solving for more as needed).
+modal::ModeSet lowest_modes(const SparseMatrix& stiffness, const SparseMatrix& mass, const ReductionOptions& options) {
+  modal::ModalOptions settings;
+  settings.solver = modal::Solver::arpack;
+  settings.lumped_mass = true;
+  const Index n_free = stiffness.rows();
+  if (options.modes > 0) {
+    settings.modes = options.modes;
+    return modal::solve_modes(stiffness, mass, settings, 0);
+  }
+  if (!(options.max_frequency_hz > 0.0)) {
+    throw InputError("reduced model: expected a mode count or a positive maximum frequency, got neither");
+  }
+  const double target = options.max_frequency_hz * std::max(1.0, options.frequency_margin);
+  settings.modes = static_cast<int>(std::min<Index>(kFirstModeCount, n_free - 1));
+  for (;;) {
+    modal::ModeSet modes = modal::solve_modes(stiffness, mass, settings, 0);
+    if (modes.n_modes() > 0 && modes.frequencies_hz[modes.n_modes() - 1] > target) return modes;
+    if (settings.modes >= n_free / 2) return modes;  // all the body has (small test meshes)
+    settings.modes = static_cast<int>(std::min<Index>(2 * settings.modes, n_free / 2));
+  }
+}
+
+void mix(std::uint64_t& hash, const void* data, std::size_t bytes) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < bytes; ++i) {
+    hash ^= p[i];
+    hash *= 1099511628211ull;
+  }
+}
+
+std::filesystem::path cache_file(const std::filesystem::path& directory, std::uint64_t key) {
+  char name[48];
+  std::snprintf(name, sizeof name, "reduction-%016llx.bin", static_cast<unsigned long long>(key));
+  return directory / name;
+}
+
+void put(std::string& out, const MatrixX& matrix) {
+  const std::int64_t size[2] = {matrix.rows(), matrix.cols()};
+  out.append(reinterpret_cast<const char*>(size), sizeof size);
+  out.append(reinterpret_cast<const char*>(matrix.data()), sizeof(double) * matrix.size());
+}
+
+template <typename Dense>
+bool get(std::istream& in, Dense& matrix) {
+  std::int64_t size[2];
+  if (!in.read(reinterpret_cast<char*>(size), sizeof size) || size[0] < 0 || size[1] < 0) return false;
+  if (Dense::ColsAtCompileTime == 1 && size[1] != 1) return false;
+  matrix.resize(size[0], size[1]);
+  return static_cast<bool>(in.read(reinterpret_cast<char*>(matrix.data()), sizeof(double) * matrix.size()));
+}
+
+}  // namespace
+
+std::vector<mesh::CrackPair> split_pairs(const mesh::Mesh& mesh) {
+  std::vector<mesh::CrackPair> pairs;
+  for (const mesh::CrackPair& pair : mesh.crack_pairs) {
+    if (!pair.on_front()) pairs.push_back(pair);
+  }
+  return pairs;
+}
+
+std::pair<Vec3, Vec3> pair_tangents(const Vec3& normal) {
+  Index axis = 0;
+  normal.cwiseAbs().minCoeff(&axis);
+  const Vec3 first = Vec3::Unit(axis).cross(normal).normalized();
+  return {first, normal.cross(first).normalized()};
+}
+
+std::optional<Index> Reduction::modes_up_to(double f_hz) const {
+  const double omega_limit = 2.0 * kPi * f_hz;
+  if (omega.size() == 0 || !(omega[omega.size() - 1] > omega_limit)) return std::nullopt;
+  Index count = 0;
+  while (count < omega.size() && omega[count] <= omega_limit) ++count;
+  return count;
+}
+
+Reduction compute_reduction(const fem::System& system, const ReductionOptions& options,
+                            const std::vector<Index>& output_nodes, const fem::LoadShape& load) {
+  const fem::Constraints& constraints = system.constraints();
+  const int n_rigid = modal::count_rigid_body_modes(system.mesh(), system.dofs(), constraints);
+  if (n_rigid > 0) {
+    throw InputError("reduced model: the " + std::string(mesh::variant_name(system.variant())) + " body has " +
+                     std::to_string(n_rigid) +
+                     " rigid-body modes; the reduced model needs a body held by Dirichlet conditions "
+                     "(boundary:) so that K is positive definite (use transient.model: full)");
+  }
+  Reduction reduction;
+  reduction.friction = options.friction;
+  Stopwatch clock;
+  const SparseMatrix stiffness = fem::restrict_to_free(system.assemble_stiffness(), constraints);
+  const SparseMatrix mass = diagonal(fem::restrict_to_free(system.lumped_mass(), constraints));
+  const modal::ModeSet modes = lowest_modes(stiffness, mass, options);
+  reduction.modes_s = clock.seconds();
+
+  Stopwatch flexibility_clock;
+  std::vector<Row> pair_rows, output_rows;
+  build_rows(system, options.friction, output_nodes, pair_rows, output_rows, reduction.pair_area);
+  const Index m = modes.n_modes(), c = static_cast<Index>(pair_rows.size()), o = static_cast<Index>(output_rows.size());
+  reduction.omega = 2.0 * kPi * modes.frequencies_hz;
+  reduction.pair_modes.resize(c, m);
+  reduction.output_modes.resize(o, m);
+  for (Index r = 0; r < m; ++r) {
+    const VectorX phi = modes.shapes.col(r);
+    for (Index i = 0; i < c; ++i) reduction.pair_modes(i, r) = pair_rows[i].dot(phi);
+    for (Index i = 0; i < o; ++i) reduction.output_modes(i, r) = output_rows[i].dot(phi);
+  }
+  const VectorX load_free = fem::restrict_to_free(load.dense(system.n_dofs()), constraints);
+  reduction.load_modal = modes.shapes.transpose() * load_free;
+
+  // Static images: one solve per pair row and one for the load, only rows B and C kept.
+  modal::CholmodFactor factor(stiffness, mass, 0.0, "reduced model: static solve with K");
+  const Index n_free = stiffness.rows();
+  VectorX rhs(n_free), solution(n_free);
+  reduction.pair_static.resize(c, c);
+  reduction.output_static.resize(o, c);
+  for (Index j = 0; j < c; ++j) {
+    rhs.setZero();
+    pair_rows[j].add_to(rhs, 1.0);
+    factor.solve(rhs.data(), solution.data());
+    for (Index i = 0; i < c; ++i) reduction.pair_static(i, j) = pair_rows[i].dot(solution);
+    for (Index i = 0; i < o; ++i) reduction.output_static(i, j) = output_rows[i].dot(solution);
+  }
+  reduction.pair_static = 0.5 * (reduction.pair_static + reduction.pair_static.transpose()).eval();
+  factor.solve(load_free.data(), solution.data());
+  reduction.pair_static_load.resize(c);
+  reduction.output_static_load.resize(o);
+  for (Index i = 0; i < c; ++i) reduction.pair_static_load[i] = pair_rows[i].dot(solution);
+  for (Index i = 0; i < o; ++i) reduction.output_static_load[i] = output_rows[i].dot(solution);
+  reduction.flexibility_s = flexibility_clock.seconds();
+  return reduction;
+}
+
+ReducedSystem reduced_system(const Reduction& reduction, Index modes, double load_scale) {
+  if (modes < 0 || modes > reduction.n_computed_modes()) {
+    throw InputError("reduced model: " + std::to_string(modes) + " modes asked, " +
+                     std::to_string(reduction.n_computed_modes()) + " computed");
+  }
+  ReducedSystem system;
+  system.omega = reduction.omega.head(modes);
+  system.friction = reduction.friction;
+  system.pair_area = reduction.pair_area;
+  system.initial_gap = VectorX::Zero(reduction.pair_area.size());
+  system.pair_modes = reduction.pair_modes.leftCols(modes);
+  system.output_modes = reduction.output_modes.leftCols(modes);
+  system.load_modal = load_scale * reduction.load_modal.head(modes);
+  const VectorX inverse_square = system.omega.array().square().inverse().matrix();
+  const MatrixX pair_scaled = system.pair_modes * inverse_square.asDiagonal();
+  const MatrixX output_scaled = system.output_modes * inverse_square.asDiagonal();
+  system.residual = reduction.pair_static - pair_scaled * system.pair_modes.transpose();
+  system.residual = 0.5 * (system.residual + system.residual.transpose()).eval();
+  system.output_residual_pairs = reduction.output_static - output_scaled * system.pair_modes.transpose();
+  const VectorX load_unit = reduction.load_modal.head(modes);
+  system.load_residual = load_scale * (reduction.pair_static_load - pair_scaled * load_unit);
+  system.output_residual_load = load_scale * (reduction.output_static_load - output_scaled * load_unit);
+  return system;
+}
+
+std::uint64_t reduction_key(const fem::System& system, const std::vector<Index>& output_nodes,
+                            const fem::LoadShape& load, bool friction) {
+  std::uint64_t hash = 1469598103934665603ull;
+  mix(hash, kMagic, sizeof kMagic);
+  const SparseMatrix stiffness = fem::restrict_to_free(system.assemble_stiffness(), system.constraints());
+  const Index rows = stiffness.rows(), nonzeros = stiffness.nonZeros();
+  mix(hash, &rows, sizeof rows);
+  mix(hash, &nonzeros, sizeof nonzeros);
+  mix(hash, stiffness.outerIndexPtr(), sizeof(*stiffness.outerIndexPtr()) * (rows + 1));
+  mix(hash, stiffness.innerIndexPtr(), sizeof(*stiffness.innerIndexPtr()) * nonzeros);
+  mix(hash, stiffness.valuePtr(), sizeof(double) * nonzeros);
+  const VectorX mass = fem::restrict_to_free(system.lumped_mass(), system.constraints());
+  mix(hash, mass.data(), sizeof(double) * mass.size());
+  const int variant = static_cast<int>(system.variant());
+  mix(hash, &variant, sizeof variant);
+  for (const mesh::CrackPair& pair : split_pairs(system.mesh())) {
+    mix(hash, &pair.minus, sizeof pair.minus);
+    mix(hash, &pair.plus, sizeof pair.plus);
+    mix(hash, pair.normal.data(), 3 * sizeof(double));
+    mix(hash, &pair.area, sizeof pair.area);
+  }
+  const std::int64_t n_outputs = static_cast<std::int64_t>(output_nodes.size());
+  mix(hash, &n_outputs, sizeof n_outputs);
+  mix(hash, output_nodes.data(), sizeof(Index) * output_nodes.size());
+  mix(hash, load.dofs.data(), sizeof(Index) * load.dofs.size());
+  mix(hash, load.values.data(), sizeof(double) * load.values.size());
+  const char with_friction = friction ? 1 : 0;
+  mix(hash, &with_friction, 1);
+  return hash;
+}
+
+std::optional<Reduction> load_cached_reduction(const std::filesystem::path& directory, std::uint64_t key) {
+  std::ifstream in(cache_file(directory, key), std::ios::binary);
+  if (!in) return std::nullopt;
+  char magic[sizeof kMagic];
+  std::uint64_t stored_key = 0;
+  if (!in.read(magic, sizeof magic) || std::memcmp(magic, kMagic, sizeof magic) != 0) return std::nullopt;
+  if (!in.read(reinterpret_cast<char*>(&stored_key), sizeof stored_key) || stored_key != key) return std::nullopt;
+  Reduction reduction;
+  char friction = 0;
+  double times[2] = {0.0, 0.0};
+  if (!in.read(&friction, 1) || !in.read(reinterpret_cast<char*>(times), sizeof times)) return std::nullopt;
+  reduction.friction = friction != 0;
+  reduction.modes_s = times[0];
+  reduction.flexibility_s = times[1];
+  if (!get(in, reduction.omega) || !get(in, reduction.pair_modes) || !get(in, reduction.output_modes) ||
+      !get(in, reduction.load_modal) || !get(in, reduction.pair_static) || !get(in, reduction.output_static) ||
+      !get(in, reduction.pair_static_load) || !get(in, reduction.output_static_load) ||
+      !get(in, reduction.pair_area)) {
+    return std::nullopt;
+  }
+  const Index m = reduction.omega.size(), c = reduction.pair_static.rows(), o = reduction.output_static.rows();
+  if (reduction.pair_modes.rows() != c || reduction.pair_modes.cols() != m || reduction.output_modes.cols() != m ||
+      reduction.output_modes.rows() != o || reduction.load_modal.size() != m || reduction.pair_static.cols() != c ||
+      reduction.output_static.cols() != c || reduction.pair_static_load.size() != c ||
+      reduction.output_static_load.size() != o) {
+    return std::nullopt;
+  }
+  return reduction;
+}
+
+void store_cached_reduction(const std::filesystem::path& directory, std::uint64_t key, const Reduction& reduction) {
+  io::ensure_directory(directory);
+  std::string out(kMagic, sizeof kMagic);
+  out.append(reinterpret_cast<const char*>(&key), sizeof key);
+  out.push_back(reduction.friction ? 1 : 0);
+  const double times[2] = {reduction.modes_s, reduction.flexibility_s};
+  out.append(reinterpret_cast<const char*>(times), sizeof times);
+  for (const MatrixX& matrix :
+       {MatrixX(reduction.omega), reduction.pair_modes, reduction.output_modes, MatrixX(reduction.load_modal),
+        reduction.pair_static, reduction.output_static, MatrixX(reduction.pair_static_load),
+        MatrixX(reduction.output_static_load), MatrixX(reduction.pair_area)}) {
+    put(out, matrix);
+  }
+  io::write_file_atomic(cache_file(directory, key), out);
+}
+
+}  // namespace crackle::reduced

@@ -1,0 +1,84 @@
+#pragma once
+/// \file Building a ReducedSystem from a finite-element system (HYBRID.md §2): the lowest modes of
+/// the variant with the lumped mass of the full transient, and the residual flexibility seen by the
+/// crack pairs, the load and the outputs (probe DOFs), from static solves with one CHOLMOD factor of K.
+///
+/// What is computed once and kept (a `Reduction`, also what the file cache stores) are the static
+/// images \f$B K^{-1} B^T\f$, \f$C K^{-1} B^T\f$, \f$B K^{-1}\hat f\f$, \f$C K^{-1}\hat f\f$ and the modal
+/// images \f$B\Phi\f$, \f$C\Phi\f$, \f$\Phi^T\hat f\f$ of every mode computed. The residual flexibility of
+/// any m of them follows without a solve: \f$G_{res} = K^{-1} - \Phi_m\Omega_m^{-2}\Phi_m^T\f$, so
+/// \f$R = B K^{-1}B^T - B\Phi_m \Omega_m^{-2} (B\Phi_m)^T\f$ and likewise for the other images. Never an
+/// n_DOF x n_c block: the static solves go one column at a time and only the rows B and C are kept.
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <vector>
+
+#include "core/types.hpp"
+#include "fem/system.hpp"
+#include "reduced/system.hpp"
+
+namespace crackle::reduced {
+
+/// Which modes to compute.
+struct ReductionOptions {
+  /// Modes to keep; 0: every mode below `max_frequency_hz` (found by solving for more until the
+  /// highest computed mode is above it).
+  int modes = 0;
+  double max_frequency_hz = 0.0;  ///< [Hz], used when modes == 0
+  /// Computed modes reach at least this multiple of max_frequency_hz (modes == 0 only), so that a
+  /// cached reduction also serves later cases asking a little more (a study over frequency).
+  double frequency_margin = 1.5;
+  bool friction = false;  ///< 3 rows per pair (normal, two tangents) instead of 1
+};
+
+/// The expensive part of a reduction, for M computed modes and c pair rows, o outputs.
+struct Reduction {
+  VectorX omega;             ///< omega_r of all computed modes [rad/s], ascending (M)
+  MatrixX pair_modes;        ///< B Phi (c x M)
+  MatrixX output_modes;      ///< C Phi (o x M)
+  VectorX load_modal;        ///< Phi^T f_hat (M) for the load shape given (unit amplitude in the pipeline)
+  MatrixX pair_static;       ///< B K^-1 B^T (c x c) [m/N]
+  MatrixX output_static;     ///< C K^-1 B^T (o x c)
+  VectorX pair_static_load;  ///< B K^-1 f_hat (c)
+  VectorX output_static_load;  ///< C K^-1 f_hat (o)
+  VectorX pair_area;         ///< area of each split pair [m^2]
+  bool friction = false;
+  double modes_s = 0.0;        ///< eigen-solve time [s]
+  double flexibility_s = 0.0;  ///< factorisation and static solves [s]
+
+  Index n_computed_modes() const { return static_cast<Index>(omega.size()); }
+  /// Number of computed modes with frequency <= f_hz; nullopt when the computed set might miss some
+  /// (its highest mode is not above f_hz).
+  std::optional<Index> modes_up_to(double f_hz) const;
+};
+
+/// The split crack pairs of the mesh (minus != plus), in mesh order: those that carry force.
+std::vector<mesh::CrackPair> split_pairs(const mesh::Mesh& mesh);
+
+/// The orthonormal tangents (a_1, a_2) of a pair's plane normal to n+ used for the friction rows.
+std::pair<Vec3, Vec3> pair_tangents(const Vec3& normal);
+
+/// Computes modes and static images of `system` (Dirichlet conditions must hold it: a free body is
+/// refused with InputError). Pairs: every split crack pair of the mesh when the variant is open,
+/// none otherwise. Outputs: 3 rows per node of `output_nodes` (components x, y, z; a held DOF
+/// gives a zero row). `load`: the load shape f_hat.
+Reduction compute_reduction(const fem::System& system, const ReductionOptions& options,
+                            const std::vector<Index>& output_nodes, const fem::LoadShape& load);
+
+/// The ReducedSystem of the first m computed modes (m <= n_computed_modes()) with the residual
+/// flexibility of the rest; the load images scaled by `load_scale`. Contact (penalties, gap,
+/// friction coefficient) and damping are left for the caller to fill.
+ReducedSystem reduced_system(const Reduction& reduction, Index modes, double load_scale);
+
+/// Fingerprint of a reduction's inputs that do not depend on the mode count: K and the lumped
+/// mass over the free DOFs, the pair rows, the output rows, the load shape and the friction flag.
+std::uint64_t reduction_key(const fem::System& system, const std::vector<Index>& output_nodes,
+                            const fem::LoadShape& load, bool friction);
+
+/// The cached reduction of this key in `directory`, or nullopt (absent, damaged or foreign file).
+std::optional<Reduction> load_cached_reduction(const std::filesystem::path& directory, std::uint64_t key);
+/// Stores a reduction atomically under its key.
+void store_cached_reduction(const std::filesystem::path& directory, std::uint64_t key, const Reduction& reduction);
+
+}  // namespace crackle::reduced

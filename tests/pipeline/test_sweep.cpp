@@ -1,0 +1,287 @@
+// The sweep pipeline on reduced systems written by hand: the scene's sweep: section (defaults,
+// file:line errors), the linear sweep against the receptance, a bilinear oscillator's
+// super-harmonic resonance at f_b/2, harmonic balance against the stepped sine, and the files.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include <Eigen/Eigenvalues>
+
+#include "core/errors.hpp"
+#include "io/csv.hpp"
+#include "pipeline/sweep.hpp"
+#include "scene/scene.hpp"
+
+namespace crackle::pipeline {
+namespace {
+
+constexpr double kTwoPi = 6.283185307179586476925286766559;
+
+std::string beam_scene(const std::string& sweep, const std::string& contact = "{penalty: auto}") {
+  return "mesh:\n"
+         "  box: {size: [0.2, 0.02, 0.01], cells: [40, 4, 2], order: 2}\n"
+         "material: {E: 210.0e9, nu: 0.3, rho: 7850.0}\n"
+         "boundary:\n"
+         "  - {face: x-, fix: [x, y, z]}\n"
+         "crack:\n"
+         "  plane: {normal: x, at: 0.05}\n"
+         "  region: {y: [0.0, 0.02], z: [0.007, 0.01]}\n"
+         "  contact: " + contact + "\n"
+         "transient:\n"
+         "  excitation: {face: x+, direction: z, amplitude: 20.0, frequency: {mode: 1, ratio: 0.5}}\n"
+         "  damping: {ratio: 0.05, at: {mode: 1}}\n"
+         "  periods: 60\n"
+         "  probes:\n"
+         "    - {name: tip, point: [0.2, 0.01, 0.01]}\n"
+         "    - {name: side, point: [0.2, 0.0, 0.005], component: y}\n" +
+         sweep;
+}
+
+std::string error_of(const std::string& text) {
+  try {
+    scene::parse_scene(text, "sweep.yaml");
+  } catch (const InputError& error) {
+    return error.what();
+  }
+  return "(no error)";
+}
+
+TEST(SweepScene, DefaultsAndModeRelativeRange) {
+  const scene::Scene scene = scene::parse_scene(
+      beam_scene("sweep:\n  frequency: {from: {mode: 1, ratio: 0.45}, to: {mode: 1, ratio: 0.55}}\n"), "sweep.yaml");
+  ASSERT_TRUE(scene.sweep);
+  const scene::SweepSection& sweep = *scene.sweep;
+  EXPECT_EQ(sweep.from.mode, 1);
+  EXPECT_EQ(sweep.from.ratio, 0.45);
+  EXPECT_EQ(sweep.to.ratio, 0.55);
+  EXPECT_EQ(sweep.from.of, "bilinear");
+  EXPECT_FALSE(sweep.from.hz);
+  EXPECT_EQ(sweep.harmonics, 15);
+  EXPECT_EQ(sweep.subharmonic, 1);
+  EXPECT_EQ(sweep.method, "harmonic_balance");
+  EXPECT_TRUE(sweep.stability);
+  EXPECT_EQ(sweep.points, 200);
+  const std::vector<SweepProbe> probes = sweep_probes(scene);
+  ASSERT_EQ(probes.size(), 2u);
+  EXPECT_EQ(probes[0].row, 2);  // tip, the excitation direction z
+  EXPECT_EQ(probes[1].row, 4);  // side, y of probe 1
+  // Hz as scalars; stability defaults off with friction.
+  const scene::Scene hz = scene::parse_scene(
+      beam_scene("sweep:\n  frequency: {from: 400, to: 300}\n  method: stepped_sine\n", "{friction: 0.3}"), "s.yaml");
+  EXPECT_EQ(*hz.sweep->from.hz, 400.0);
+  EXPECT_EQ(*hz.sweep->to.hz, 300.0);
+  EXPECT_FALSE(hz.sweep->stability);
+  EXPECT_EQ(hz.sweep->method, "stepped_sine");
+}
+
+TEST(SweepScene, BadKeysNameFileAndLine) {
+  const std::string range = "  frequency: {from: {mode: 1, ratio: 0.45}, to: {mode: 1, ratio: 0.55}}\n";
+  EXPECT_EQ(error_of(beam_scene("sweep:\n" + range + "  harmonics: 0\n")),
+            "sweep.yaml:19: sweep.harmonics: expected an integer in 1..200, got 0");
+  EXPECT_EQ(error_of(beam_scene("sweep:\n" + range + "  subharmonic: 3\n")),
+            "sweep.yaml:19: sweep.subharmonic: expected an integer in 1..2, got 3");
+  EXPECT_EQ(error_of(beam_scene("sweep:\n" + range + "  method: sine\n")).substr(0, 40),
+            "sweep.yaml:19: sweep.method: expected on");
+  EXPECT_EQ(error_of(beam_scene("sweep:\n" + range + "  harmonic: 5\n")).substr(0, 32),
+            "sweep.yaml:19: sweep.harmonic: e");
+  EXPECT_EQ(error_of(beam_scene("sweep:\n  harmonics: 5\n")).substr(0, 37), "sweep.yaml:17: sweep.frequency: expec");
+  EXPECT_EQ(error_of(beam_scene("sweep:\n  frequency: {from: {mode: 1, ratio: 0.5}, to: {mode: 1, ratio: 0.5}}\n")),
+            "sweep.yaml:18: sweep.frequency.to: expected a frequency other than sweep.frequency.from, got the same");
+  EXPECT_EQ(error_of(beam_scene("sweep:\n  frequency: {from: {hz: 1, mode: 1}, to: 5}\n")),
+            "sweep.yaml:18: sweep.frequency.from: expected exactly one of hz, mode, got hz and mode");
+  EXPECT_EQ(error_of(beam_scene("sweep:\n  frequency: {from: -1, to: 5}\n")),
+            "sweep.yaml:18: sweep.frequency.from.hz: expected a positive number, got -1");
+  EXPECT_EQ(error_of(beam_scene("sweep:\n" + range + "  stability: true\n", "{friction: 0.3}")),
+            "sweep.yaml:19: sweep.stability: expected false with friction (Hill's method is frictionless), got true");
+}
+
+/// A few modes with pairs a metre apart (never in contact): a linear body. Outputs: 3 rows.
+reduced::ReducedSystem linear_system() {
+  MatrixX stiffness(3, 3), mass = MatrixX::Identity(3, 3);
+  stiffness << 2.0e4, -1.0e4, 0, -1.0e4, 2.0e4, -1.0e4, 0, -1.0e4, 1.5e4;
+  mass.diagonal() << 1.0, 2.0, 0.5;
+  Eigen::GeneralizedSelfAdjointEigenSolver<MatrixX> eig(stiffness, mass);
+  const MatrixX phi = eig.eigenvectors();
+  MatrixX b(2, 3), c(3, 3);
+  b << 1, -1, 0, 0, 1, -1;
+  c << 1, 0, 0, 0, 1, 0, 0, 0, 1;
+  reduced::ReducedSystem s;
+  s.omega = eig.eigenvalues().cwiseSqrt();
+  s.rayleigh_alpha = 2.0;
+  s.rayleigh_beta = 1e-4;
+  s.pair_area = VectorX::Ones(2);
+  s.initial_gap = VectorX::Constant(2, 1.0);
+  s.normal_penalty = 1e9;
+  s.pair_modes = b * phi;
+  s.residual = MatrixX::Identity(2, 2) * 1e-9;
+  s.load_modal = phi.transpose() * Eigen::Vector3d(0.0, 0.0, 3.0);
+  s.load_residual = VectorX::Zero(2);
+  s.output_modes = c * phi;
+  s.output_residual_pairs = MatrixX::Zero(3, 2);
+  s.output_residual_load = Eigen::Vector3d(1e-7, 0.0, 2e-7);
+  return s;
+}
+
+/// The receptance response of output `row` at Omega: C Phi D Phi^T f + C G_res f.
+std::complex<double> receptance(const reduced::ReducedSystem& s, Index row, double omega) {
+  std::complex<double> y = s.output_residual_load[row];
+  for (Index r = 0; r < s.n_modes(); ++r) {
+    const double w = s.omega[r];
+    y += s.output_modes(row, r) * s.load_modal[r] /
+         std::complex<double>(w * w - omega * omega, 2.0 * s.damping_ratio(r) * w * omega);
+  }
+  return y;
+}
+
+SweepSettings settings_for(double from_hz, double to_hz, int harmonics, int points) {
+  SweepSettings settings;
+  settings.from_hz = from_hz;
+  settings.to_hz = to_hz;
+  settings.section.harmonics = harmonics;
+  settings.section.points = points;
+  settings.probes = {{"a", 0, 0}, {"c", 2, 2}};
+  return settings;
+}
+
+TEST(SweepLinear, HarmonicBalanceIsTheReceptance) {
+  const reduced::ReducedSystem s = linear_system();
+  const double f1 = s.omega[0] / kTwoPi, f2 = s.omega[1] / kTwoPi;
+  const SweepSettings settings = settings_for(0.5 * f1, 0.5 * (f1 + f2), 5, 60);
+  const SweepResult result = harmonic_balance_sweep(s, settings);
+  ASSERT_TRUE(result.completed);
+  ASSERT_GE(result.points.size(), 60u);
+  EXPECT_TRUE(result.events.empty());
+  EXPECT_TRUE(result.warnings.empty()) << result.warnings.front();
+  double worst = 0.0, higher = 0.0;
+  for (const SweepPoint& point : result.points) {
+    EXPECT_TRUE(point.stable);
+    for (Index row : {0, 2}) {
+      const std::complex<double> expected = receptance(s, row, point.solution.omega);
+      const std::complex<double> got = std::polar(point.solution.amplitude(row, 1.0), point.solution.phase(row, 1.0));
+      worst = std::max(worst, std::abs(got - expected) / std::abs(expected));
+      for (int k = 2; k <= 5; ++k) higher = std::max(higher, point.solution.amplitude(row, k) / std::abs(expected));
+      higher = std::max(higher, point.solution.amplitude(row, 0.0) / std::abs(expected));
+    }
+  }
+  EXPECT_LT(worst, 1e-10);
+  EXPECT_LT(higher, 1e-13);
+}
+
+TEST(SweepLinear, SteppedSineIsTheReceptance) {
+  const reduced::ReducedSystem s = linear_system();
+  const double f1 = s.omega[0] / kTwoPi;
+  SweepSettings settings = settings_for(0.8 * f1, 1.2 * f1, 3, 5);
+  settings.section.method = "stepped_sine";
+  settings.section.tolerance = 1e-9;
+  const SweepResult result = stepped_sine_sweep(s, settings);
+  ASSERT_EQ(result.points.size(), 10u);
+  EXPECT_TRUE(result.warnings.empty()) << result.warnings.front();
+  for (std::size_t i = 0; i < result.points.size(); ++i) {
+    const SweepPoint& point = result.points[i];
+    EXPECT_EQ(point.direction, i < 5 ? 1 : -1);
+    EXPECT_DOUBLE_EQ(point.frequency_hz(), result.points[9 - i].frequency_hz());
+    const std::complex<double> expected = receptance(s, 2, point.solution.omega);
+    const std::complex<double> got = std::polar(point.solution.amplitude(2, 1.0), point.solution.phase(2, 1.0));
+    // Average acceleration at >= 120 steps per period of the highest mode: (omega h)^2 / 12 ~ 2e-4 in frequency.
+    EXPECT_LT(std::abs(got - expected) / std::abs(expected), 5e-3) << point.frequency_hz();
+    EXPECT_LT(point.solution.amplitude(2, 2.0), 1e-9 * std::abs(expected));
+  }
+}
+
+/// A bilinear oscillator (HYBRID.md §4 with one mode and one pair): open stiffness 1, closed 4,
+/// so omega_b = 2 * 1 * 2 / 3 = 4/3 rad/s. Output row 0 = q.
+reduced::ReducedSystem bilinear_oscillator() {
+  reduced::ReducedSystem s;
+  s.omega = VectorX::Constant(1, 1.0);
+  s.rayleigh_alpha = 2.0 * 0.02;
+  s.pair_area = VectorX::Ones(1);
+  s.initial_gap = VectorX::Zero(1);
+  s.normal_penalty = 3.0;
+  s.pair_modes = MatrixX::Ones(1, 1);
+  s.residual = MatrixX::Zero(1, 1);
+  s.load_modal = VectorX::Constant(1, 1e-3);
+  s.load_residual = VectorX::Zero(1);
+  s.output_modes = MatrixX::Ones(3, 1);
+  s.output_residual_pairs = MatrixX::Zero(3, 1);
+  s.output_residual_load = VectorX::Zero(3);
+  return s;
+}
+
+constexpr double kBilinearHz = 4.0 / 3.0 / kTwoPi;
+
+TEST(SweepBilinear, SuperHarmonicPeakAtHalfTheBilinearFrequency) {
+  const reduced::ReducedSystem s = bilinear_oscillator();
+  SweepSettings settings = settings_for(0.42 * kBilinearHz, 0.58 * kBilinearHz, 20, 200);
+  settings.bilinear_hz = kBilinearHz;
+  const SweepResult result = harmonic_balance_sweep(s, settings);
+  ASSERT_TRUE(result.completed);
+  ASSERT_GE(result.points.size(), 200u);
+  const nlohmann::json document = sweep_json(result, settings);
+  const double peak_hz = document["probes"]["a"]["peak_a2_over_a1"]["frequency_hz"];
+  EXPECT_NEAR(peak_hz / (0.5 * kBilinearHz), 1.0, 5e-3);
+  EXPECT_GT(document["probes"]["a"]["peak_a2_over_a1"]["value"].get<double>(), 0.05);
+  // Continuation through the resonance in a few hundred points (not thousands), each converged.
+  EXPECT_LT(result.points.size(), 600u);
+  for (const SweepPoint& point : result.points) EXPECT_LE(point.solution.residual, 1e-10);
+}
+
+TEST(SweepBilinear, HarmonicBalanceMatchesTheSteppedSine) {
+  const reduced::ReducedSystem s = bilinear_oscillator();
+  SweepSettings hb = settings_for(0.46 * kBilinearHz, 0.54 * kBilinearHz, 40, 4);
+  hb.section.method = "stepped_sine";
+  hb.section.tolerance = 1e-10;
+  const SweepResult stepped = stepped_sine_sweep(s, hb);
+  ASSERT_TRUE(stepped.warnings.empty()) << stepped.warnings.front();
+  SweepSettings continuation = settings_for(0.45 * kBilinearHz, 0.55 * kBilinearHz, 40, 50);
+  continuation.section.stability = false;
+  const SweepResult branch = harmonic_balance_sweep(s, continuation);
+  sweep::HarmonicBalanceOptions options;
+  options.harmonics = 40;
+  const sweep::HarmonicBalance balance(s, options);
+  for (std::size_t i = 0; i < 4; ++i) {
+    const SweepPoint& point = stepped.points[i];
+    const SweepPoint* nearest = &branch.points.front();
+    for (const SweepPoint& candidate : branch.points)
+      if (std::abs(candidate.solution.omega - point.solution.omega) < std::abs(nearest->solution.omega - point.solution.omega))
+        nearest = &candidate;
+    const sweep::Solution solution = balance.solve(point.solution.omega, nearest->solution.gaps);
+    for (int k = 1; k <= 3; ++k) {
+      const double reference = solution.amplitude(0, k);
+      EXPECT_NEAR(point.solution.amplitude(0, k) / reference, 1.0, 5e-3) << "f " << point.frequency_hz() << " A" << k;
+    }
+    // Up and down agree where there is one branch.
+    EXPECT_NEAR(stepped.points[7 - i].solution.amplitude(0, 1) / point.solution.amplitude(0, 1), 1.0, 1e-6);
+  }
+}
+
+TEST(SweepFiles, TableJsonAndPlot) {
+  const reduced::ReducedSystem s = bilinear_oscillator();
+  SweepSettings settings = settings_for(0.45 * kBilinearHz, 0.55 * kBilinearHz, 6, 20);
+  settings.bilinear_hz = kBilinearHz;
+  const SweepResult result = harmonic_balance_sweep(s, settings);
+  const io::CsvTable table = sweep_table(result, settings);
+  ASSERT_EQ(table.headers.front(), "excitation frequency [Hz]");
+  for (const std::string header : {"a u_x A1 [m]", "a u_x phase1 [rad]", "a u_x A6 [m]", "c u_z A0 [m]",
+                                   "c u_z A2/A1 [-]", "c u_z A3/A1 [-]", "c u_z A1/2/A1 [-]",
+                                   "stable [1 yes, 0 no, -1 not computed]", "newton iterations [-]", "residual [-]"}) {
+    EXPECT_NE(std::find(table.headers.begin(), table.headers.end(), header), table.headers.end()) << header;
+  }
+  for (const auto& column : table.columns) EXPECT_EQ(column.size(), result.points.size());
+  const nlohmann::json document = sweep_json(result, settings);
+  for (const char* key : {"settings", "bilinear_hz", "points", "events", "warnings", "probes", "completed"})
+    EXPECT_TRUE(document.contains(key)) << key;
+  EXPECT_EQ(document["settings"]["harmonics"], 6);
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() / "crackle-sweep-plot";
+  std::filesystem::create_directories(folder);
+  const spectral::PlotResult plot = plot_sweep(folder / "sweep_a.png", result, settings, 0);
+  EXPECT_TRUE(std::filesystem::exists(folder / "sweep_a.dat"));
+  if (spectral::gnuplot_available(spectral::PlotOptions())) EXPECT_TRUE(plot.written) << plot.note;
+}
+
+}  // namespace
+}  // namespace crackle::pipeline
