@@ -9,6 +9,7 @@
 #include "fem/material.hpp"
 #include "mesh/box.hpp"
 #include "mesh/gmsh.hpp"
+#include "pipeline/limits.hpp"
 
 namespace crackle::pipeline {
 namespace {
@@ -138,6 +139,7 @@ std::vector<scene::Override> parse_overrides(const std::vector<std::string>& ass
 }
 
 Model build_model(const scene::Scene& scene) {
+  check_memory(scene, false);
   Model model;
   if (!scene.gmsh_file.empty()) {
     mesh::GmshOptions options;
