@@ -44,7 +44,11 @@ void run_modal_command(const ModalCommandOptions& options, std::ostream& out) {
     folder->finish("done");
     out << modal::modal_table(result);
   } catch (...) {
-    if (folder) folder->finish("failed");
+    try {
+      if (folder) folder->finish("failed");
+    } catch (const std::exception&) {
+      // The solve's own error says more than a failure to record it.
+    }
     throw;
   }
   out << "wrote " << (options.output_directory / "modal.json").string() << ", modes.csv and the mode shapes (VTU)\n";

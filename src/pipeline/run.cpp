@@ -390,7 +390,8 @@ class SpectrumMonitor {
         change_period_ > previous_period_) {
       const double rate = std::log(steady_->change / previous_change_) / (change_period_ - previous_period_);
       const double more = std::max(0.0, std::log(spectrum_.tolerance / steady_->change) / rate);
-      eta = "ETA " + duration_text(per_period * more) + " at the current rate";
+      eta = "ETA " + duration_text(std::max(0.0, per_period * more - (clock_.seconds() - check_seconds_))) +
+            " at the current rate";
     }
     std::snprintf(text, sizeof text, "steady state: change %.2g (tolerance %.2g) at period %d, %s",
                   steady_->change, spectrum_.tolerance, periods, eta.c_str());
@@ -422,6 +423,7 @@ class SpectrumMonitor {
       previous_period_ = change_period_;
     }
     change_period_ = periods;
+    check_seconds_ = clock_.seconds();
     steady_ = verdict;
     return verdict.settled;
   }
@@ -442,6 +444,8 @@ class SpectrumMonitor {
     return buffer;
   }
   double dt_ = 0.0;
+  Stopwatch clock_;             ///< since the monitor was made (the run's start)
+  double check_seconds_ = 0.0;  ///< clock_ at the last steady-state check
   double previous_change_ = 0.0;
   int previous_period_ = 0, change_period_ = 0;
   const scene::SpectrumSection& spectrum_;
@@ -647,7 +651,11 @@ void run_run_command(const RunCommandOptions& options, std::ostream& out) {
   try {
     run_stages(scene, options, out);
   } catch (...) {
-    folder.finish("failed");
+    try {
+      folder.finish("failed");
+    } catch (const std::exception&) {
+      // The run's own error says more than a failure to record it.
+    }
     throw;
   }
   folder.finish("done");
