@@ -7,10 +7,12 @@
 #include <CLI/CLI.hpp>
 #include <cstdlib>
 #include <iostream>
+#include <new>
 #include <sstream>
 
 #include "pipeline/commands.hpp"
 #include "pipeline/sweep.hpp"
+#include "pipeline/limits.hpp"
 #include "core/errors.hpp"
 #include "modal/eigensolver.hpp"
 #include "scene/scene.hpp"
@@ -23,10 +25,13 @@ namespace {
 using namespace crackle;
 
 constexpr int kExitBadInput = 2;
+constexpr int kExitOutOfMemory = 3;  ///< as a solver failure: the computation could not finish
 
 const char* const kExitCodes =
-    "Exit codes: 0 done; 2 bad input (scene file or command line; nothing is written); 3 a solver "
-    "failed, or some cases of a study failed; 4 a file could not be read or written; 130 interrupted.";
+    "Exit codes: 0 done; 2 bad input (scene file or command line; nothing is written; also a scene "
+    "whose mesh or outputs cannot fit in the memory or on the disk); 3 a solver failed, memory ran out "
+    "during the computation, or some cases of a study failed; 4 a file could not be read or written; "
+    "130 interrupted.";
 
 const char* const kPetscChannel =
     "PETSc/SLEPc options go after --, e.g. `crackle modal s.yaml -- -eps_view`, or as --petsc \"-eps_view\" "
@@ -199,6 +204,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"slepc", "arpack"}));
   modal_command->add_option("--modal-cache", modal.modal_cache,
                             "Folder where the uncracked solve is looked up and stored (shared by study cases)");
+  modal_command->add_flag("--overwrite", modal.overwrite,
+                          "Write into a folder that holds files crackle modal did not write (they are kept)");
   modal_command->add_option("--petsc", modal_petsc, "PETSc/SLEPc options, e.g. --petsc \"-eps_view\" (repeatable)");
   modal_command->footer(kPetscChannel);
 
@@ -215,6 +222,9 @@ int main(int argc, char** argv) {
   run_command->add_option("--modal-cache", run.modal_cache,
                           "Folder where the uncracked solve is looked up and stored (shared by study cases)");
   run_command->add_flag("-q,--quiet", quiet, "No progress line");
+  run_command->add_flag("--overwrite", run.overwrite,
+                        "Write into a folder that holds files crackle run did not write (they are kept); the files "
+                        "of an earlier crackle run there are always replaced");
   run_command->add_option("--petsc", run_petsc, "PETSc/SLEPc options, e.g. --petsc \"-eps_view\" (repeatable)");
   run_command->footer(kPetscChannel);
 
@@ -329,6 +339,15 @@ int main(int argc, char** argv) {
       return study::run_study(study_options, std::cerr);
     }
     if (*format_command) std::cout << scene::scene_format_markdown();
+  } catch (const std::bad_alloc&) {
+    // The estimates refuse what surely cannot fit; what they miss (solver workspace, other
+    // processes taking the memory meanwhile) ends here, with a line that says what happened.
+    std::string source;
+    const double available = pipeline::available_memory_bytes(&source);
+    std::cerr << "crackle: error: out of memory: an allocation failed (std::bad_alloc) with "
+              << pipeline::bytes_text(available) << " available (" << source
+              << "); use a coarser mesh (mesh.box.cells, mesh.box.order), fewer modes or a shorter run\n";
+    return kExitOutOfMemory;
   } catch (const std::exception& error) {
     std::cerr << "crackle: error: " << error.what() << "\n";
     return exit_code_for(error);

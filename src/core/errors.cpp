@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cstdio>
 #include <cstdlib>
+#include <new>
 #include <string>
 
 namespace crackle {
@@ -11,6 +12,7 @@ int exit_code_for(const std::exception& error) {
   if (dynamic_cast<const InputError*>(&error)) return 2;
   if (dynamic_cast<const SolverError*>(&error)) return 3;
   if (dynamic_cast<const IoError*>(&error)) return 4;
+  if (dynamic_cast<const std::bad_alloc*>(&error)) return 3;  // out of memory: the computation could not finish
   return 1;
 }
 

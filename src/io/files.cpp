@@ -22,6 +22,48 @@ void ensure_directory(const fs::path& directory) {
   }
 }
 
+void check_writable_directory(const fs::path& directory) {
+  ensure_directory(directory);
+  const fs::path probe = directory / (".crackle-write-test." + std::to_string(::getpid()));
+  std::string reason;
+  {
+    std::ofstream out(probe, std::ios::binary | std::ios::trunc);
+    if (!out) {
+      reason = std::strerror(errno);
+    } else {
+      out << "crackle\n";
+      out.flush();
+      if (!out) reason = "write failed, disk full?";
+    }
+  }
+  std::error_code error;
+  fs::remove(probe, error);
+  if (reason.empty() && error) reason = "cannot remove a file there: " + error.message();
+  if (reason.empty()) {
+    const fs::space_info space = fs::space(directory, error);
+    if (!error && space.available == 0) reason = "no space left on its file system";
+  }
+  if (!reason.empty()) {
+    throw IoError(directory.string() + ": cannot write into the output directory (" + reason + ")");
+  }
+}
+
+double available_disk_bytes(const fs::path& path) {
+  std::error_code error;
+  const fs::space_info space = fs::space(path, error);
+  if (error || space.available == static_cast<std::uintmax_t>(-1)) return 1e300;
+  return static_cast<double>(space.available);
+}
+
+bool is_temporary_name(const std::string& file_name) {
+  const std::size_t at = file_name.rfind(".tmp.");
+  if (at == std::string::npos || at == 0 || at + 5 == file_name.size()) return false;
+  for (std::size_t i = at + 5; i < file_name.size(); ++i) {
+    if (file_name[i] < '0' || file_name[i] > '9') return false;
+  }
+  return true;
+}
+
 void write_file_atomic(const fs::path& path, const std::string& content) {
   // A unique temporary name in the same directory, so that rename() is atomic.
   const fs::path temporary = path.string() + ".tmp." + std::to_string(::getpid());

@@ -5,6 +5,7 @@
 #include "core/resources.hpp"
 #include "fem/assembly.hpp"
 #include "fem/constraints.hpp"
+#include "pipeline/limits.hpp"
 #include "pipeline/model.hpp"
 #include "scene/scene.hpp"
 
@@ -13,6 +14,7 @@ namespace crackle::pipeline {
 void run_check(const CheckOptions& options, std::ostream& out) {
   Stopwatch clock;
   const scene::Scene scene = scene::load_scene(options.scene_path, parse_overrides(options.overrides));
+  check_memory(scene, options.assemble);
   const Model model = build_model(scene);
   const double mesh_seconds = clock.seconds();
   const mesh::Mesh& mesh = model.mesh;

@@ -30,6 +30,7 @@ struct ModalCommandOptions {
   int modes = 0;       ///< overrides modal.modes when > 0
   std::string solver;  ///< overrides modal.solver when not empty
   std::filesystem::path modal_cache;  ///< folder sharing the uncracked solve between runs
+  bool overwrite = false;  ///< write into a folder that holds files of others (they are kept)
 };
 
 struct RunCommandOptions {
@@ -38,6 +39,7 @@ struct RunCommandOptions {
   std::filesystem::path output_directory = "out";
   std::filesystem::path modal_cache;  ///< folder sharing the uncracked solve between runs
   bool progress = true;               ///< progress line (also needs transient.progress)
+  bool overwrite = false;  ///< write into a folder that holds files of others (they are kept)
 };
 
 /// `crackle run`: modal (only if needed) -> transient -> spectrum; writes run.json (the stages

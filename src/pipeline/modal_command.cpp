@@ -1,9 +1,12 @@
 #include <iostream>
+#include <optional>
 
 #include "pipeline/commands.hpp"
 #include "core/errors.hpp"
 #include "io/files.hpp"
+#include "pipeline/limits.hpp"
 #include "pipeline/model.hpp"
+#include "pipeline/output_folder.hpp"
 #include "modal/modal.hpp"
 #include "scene/scene.hpp"
 
@@ -25,17 +28,29 @@ void run_modal_command(const ModalCommandOptions& options, std::ostream& out) {
   scene::ModalSection section = scene.modal;
   if (options.modes > 0) section.modes = options.modes;
   if (!options.solver.empty()) section.solver = options.solver;
-  const Model model = build_model(scene);
   const bool writer = modal::is_output_rank();
-  // Fail on an unwritable output directory before the solve, not after it.
-  if (writer) io::ensure_directory(options.output_directory);
-  modal::ModalOptions modal_settings = modal_options(section);
-  modal_settings.cache_directory = options.modal_cache;
-  const modal::ModalResult result = modal::run_modal(
-      [&model](mesh::Variant variant) -> const fem::System& { return *model.system(variant); }, modal_settings);
-  if (!writer) return;
-  modal::write_modal_outputs(options.output_directory, model.mesh, result);
-  out << modal::modal_table(result);
+  // Fail on an unwritable or foreign output directory, or a mesh too big for the memory, before the solve.
+  check_memory(scene, true);
+  std::optional<OutputFolder> folder;
+  if (writer) folder.emplace(options.output_directory, "modal", options.scene_path, options.overwrite, std::cerr);
+  try {
+    const Model model = build_model(scene);
+    modal::ModalOptions modal_settings = modal_options(section);
+    modal_settings.cache_directory = options.modal_cache;
+    const modal::ModalResult result = modal::run_modal(
+        [&model](mesh::Variant variant) -> const fem::System& { return *model.system(variant); }, modal_settings);
+    if (!writer) return;
+    modal::write_modal_outputs(options.output_directory, model.mesh, result);
+    folder->finish("done");
+    out << modal::modal_table(result);
+  } catch (...) {
+    try {
+      if (folder) folder->finish("failed");
+    } catch (const std::exception&) {
+      // The solve's own error says more than a failure to record it.
+    }
+    throw;
+  }
   out << "wrote " << (options.output_directory / "modal.json").string() << ", modes.csv and the mode shapes (VTU)\n";
 }
 

@@ -9,6 +9,7 @@
 #include "fem/material.hpp"
 #include "mesh/box.hpp"
 #include "mesh/gmsh.hpp"
+#include "pipeline/limits.hpp"
 
 namespace crackle::pipeline {
 namespace {
@@ -148,6 +149,7 @@ contact::ContactOptions scene_contact_options(const scene::Scene& scene) {
 }
 
 Model build_model(const scene::Scene& scene) {
+  check_memory(scene, false);
   Model model;
   if (!scene.gmsh_file.empty()) {
     mesh::GmshOptions options;

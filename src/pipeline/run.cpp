@@ -13,11 +13,13 @@
 #include "io/csv.hpp"
 #include "io/files.hpp"
 #include "io/vtu.hpp"
+#include "pipeline/limits.hpp"
 #include "pipeline/model.hpp"
 #include "pipeline/release.hpp"
 #include "pipeline/reduced_model.hpp"
 #include "pipeline/stages.hpp"
 #include "reduced/integrator.hpp"
+#include "pipeline/output_folder.hpp"
 #include "modal/modal.hpp"
 #include "spectral/harmonics.hpp"
 #include "spectral/plot.hpp"
@@ -88,11 +90,79 @@ std::vector<Index> nodes_in_range(const mesh::Mesh& mesh, const scene::InitialSe
   return nodes;
 }
 
-/// Per probe: the analysed component's accumulator.
+/// Per probe: the analysed component's accumulator, and that component at every step (probes.csv
+/// holds decimated rows; the amplitude spectra and the history plots take every step).
 struct ProbeSpectrum {
   std::string name;
   int component = 2;
   std::unique_ptr<spectral::HarmonicAccumulator> accumulator;
+  std::vector<double> values;
+};
+
+/// Where a point of the scene (a probe, a point force) acts: the nearest node, and how far it is.
+struct Placement {
+  Index node = 0;
+  double distance = 0.0;  ///< [m]
+};
+
+/// Places points of the scene on nodes. A point is refused when it lies outside the body's bounding
+/// box by more than kOutsideTolerance of its diagonal, or farther from its nearest node than the
+/// largest element at that node (a point in a notch of a Gmsh body).
+class PointPlacer {
+ public:
+  static constexpr double kOutsideTolerance = 1e-6;
+
+  PointPlacer(const scene::Scene& scene, const mesh::Mesh& mesh) : scene_(scene), mesh_(mesh) {
+    low_ = high_ = mesh.nodes.front();
+    for (const Vec3& x : mesh.nodes) {
+      low_ = low_.cwiseMin(x);
+      high_ = high_.cwiseMax(x);
+    }
+  }
+
+  Placement place(const Vec3& point, const std::string& key) const {
+    Placement placement;
+    placement.node = transient::nearest_node(mesh_, point);
+    placement.distance = (mesh_.nodes[placement.node] - point).norm();
+    const double outside = (low_ - point).cwiseMax(point - high_).cwiseMax(0.0).norm();
+    const double element = element_size_at(placement.node);
+    if (outside > kOutsideTolerance * (high_ - low_).norm() || placement.distance > element) {
+      const auto text = [](const Vec3& x) {
+        return "(" + format_number(x[0]) + ", " + format_number(x[1]) + ", " + format_number(x[2]) + ")";
+      };
+      std::string box;
+      for (int axis = 0; axis < 3; ++axis) {
+        box += (axis ? " x [" : "[") + format_number(low_[axis]) + ", " + format_number(high_[axis]) + "]";
+      }
+      throw InputError(scene_.where(key) + ": expected a point in the body (bounding box " + box + " m), got " +
+                       text(point) + ", " + format_number(placement.distance) + " m from the nearest node " +
+                       text(mesh_.nodes[placement.node]) +
+                       (outside > 0.0 ? ", " + format_number(outside) + " m outside the box" : std::string()));
+    }
+    return placement;
+  }
+
+ private:
+  /// The largest bounding-box diagonal of the elements around a node.
+  double element_size_at(Index node) const {
+    double size = 0.0;
+    const int n = mesh_.nodes_per_element();
+    for (Index e = 0; e < mesh_.n_elements(); ++e) {
+      const Index* nodes = mesh_.element_nodes(e);
+      if (std::find(nodes, nodes + n, node) == nodes + n) continue;
+      Vec3 low = mesh_.nodes[nodes[0]], high = low;
+      for (int a = 1; a < n; ++a) {
+        low = low.cwiseMin(mesh_.nodes[nodes[a]]);
+        high = high.cwiseMax(mesh_.nodes[nodes[a]]);
+      }
+      size = std::max(size, (high - low).norm());
+    }
+    return size;
+  }
+
+  const scene::Scene& scene_;
+  const mesh::Mesh& mesh_;
+  Vec3 low_, high_;
 };
 
 
@@ -104,6 +174,8 @@ struct TransientSetup {
   double frequency = 0.0;  ///< excitation frequency [Hz], 0 without a harmonic excitation
   std::shared_ptr<contact::ContactForce> contact;  ///< null without contact
   std::optional<ReleaseReport> release;            ///< how U(0) was made from transient.release
+  nlohmann::json probes_json = nlohmann::json::array();  ///< per probe: name, node, snapping distance
+  std::vector<std::string> warnings;  ///< found while setting up (for transient.json and stderr)
 };
 
 /// The excitation as a load, and its frequency (0 for a pulse).
@@ -114,7 +186,9 @@ transient::ExternalLoad excitation_load(const scene::Scene& scene, const Model& 
   load.name = "transient.excitation";
   if (!excitation.face.empty()) load.faces = model.mesh.face_sets.at(excitation.face);
   if (!excitation.group.empty()) load.nodes = model.mesh.node_sets.at(excitation.group);  // checked by build_model
-  if (excitation.point) load.nodes = {transient::nearest_node(model.mesh, *excitation.point)};
+  if (excitation.point) {
+    load.nodes = {PointPlacer(scene, model.mesh).place(*excitation.point, "transient.excitation.point").node};
+  }
   load.direction = Vec3::Unit(excitation.direction);
   load.amplitude = excitation.amplitude;
   if (excitation.kind == "harmonic") {
@@ -184,17 +258,52 @@ TransientSetup transient_setup(const scene::Scene& scene, const Model& model,
     setup.release = report;
   }
   add_initial_fields(section, model, system.dofs(), setup.problem.initial);
-  for (const scene::ProbeSection& probe : section.probes) {
-    setup.problem.probes.push_back({probe.name, transient::nearest_node(model.mesh, probe.point)});
+  const PointPlacer placer(scene, model.mesh);
+  for (std::size_t p = 0; p < section.probes.size(); ++p) {
+    const scene::ProbeSection& probe = section.probes[p];
+    const Placement placement = placer.place(probe.point, "transient.probes[" + std::to_string(p) + "].point");
+    setup.problem.probes.push_back({probe.name, placement.node});
+    const Vec3& x = model.mesh.nodes[placement.node];
+    setup.probes_json.push_back({{"name", probe.name},
+                                 {"point", {probe.point[0], probe.point[1], probe.point[2]}},
+                                 {"node", placement.node},
+                                 {"node_point", {x[0], x[1], x[2]}},
+                                 {"distance_m", placement.distance}});
+    // A probe whose analysed component is held (a clamped face) has A1 = 0: its ratios are NaN.
+    const int component = probe.component >= 0 ? probe.component
+                          : section.excitation  ? section.excitation->direction
+                                                : -1;
+    const fem::Constraints& constraints = system.constraints();
+    for (int c = 0; c < 3; ++c) {
+      if (c != component || !constraints.fixed[system.dofs().dof(placement.node, c)]) continue;
+      setup.warnings.push_back("probe '" + probe.name + "' (node " + std::to_string(placement.node) + ") has its u_" +
+                               axis_name(c) + " held by a boundary condition: its response is the prescribed value" +
+                               (scene.spectrum ? ", so A1 = 0 and its damage indices are undefined (NaN)" : ""));
+    }
   }
   // A hair beyond the last period, so that rounding in n dt cannot leave it one step short.
   settings.end_time = section.periods ? *section.periods / setup.frequency * (1.0 + 1e-9) : *section.duration;
+  settings.run_length_key = scene.where(section.periods ? "transient.periods" : "transient.duration");
+  settings.time_step_key = scene.where("transient.time_step");
   settings.time_step = section.time_step.value_or(0.0);
   settings.time_step_options.safety_factor = section.safety_factor;
   settings.force_time_step = section.force_time_step;
   if (setup.frequency > 0.0) settings.whole_steps_per_period = 1.0 / setup.frequency;
   settings.progress = section.progress && options.progress;
   return setup;
+}
+
+/// Steps between probes.csv rows: transient.history.samples_per_period rows per excitation period
+/// (per pulse duration), every step when it is `all` or without an excitation.
+Index probe_interval(const scene::Scene& scene, double frequency, double dt) {
+  const scene::TransientSection& section = *scene.transient;
+  if (section.history_samples_per_period <= 0) return 1;
+  double period = 0.0;
+  if (frequency > 0.0) period = 1.0 / frequency;
+  if (section.excitation && section.excitation->kind == "pulse") period = section.excitation->duration;
+  if (!(period > 0.0)) return 1;
+  const double steps = std::floor(period / dt / section.history_samples_per_period);
+  return static_cast<Index>(std::clamp(steps, 1.0, 1e9));
 }
 
 /// Per probe, a harmonic accumulator fed every step, and the steady-state verdict over all probes.
@@ -208,6 +317,14 @@ class SpectrumMonitor {
     window_periods_ = spectrum_.window_periods + (spectrum_.subharmonics && spectrum_.window_periods % 2);
     criterion_.window_periods = window_periods_;
     criterion_.tolerance = spectrum_.tolerance > 0.0 ? spectrum_.tolerance : 1e-300;
+    // The highest harmonic must lie below the Nyquist frequency of the time step: say which keys.
+    if (!(2.0 * spectrum_.harmonics * frequency * dt < 1.0)) {
+      throw InputError(scene.where("transient.excitation.frequency") +
+                       ": expected a frequency whose harmonic " + std::to_string(spectrum_.harmonics) +
+                       " (spectrum.harmonics) lies below the Nyquist frequency " + format_number(0.5 / dt) +
+                       " Hz of the time step " + format_number(dt) + " s, got " + format_number(frequency) +
+                       " Hz; lower the frequency or spectrum.harmonics, or set a smaller transient.time_step");
+    }
     for (const scene::ProbeSection& probe : section.probes) {
       ProbeSpectrum entry;
       entry.name = probe.name;
@@ -215,13 +332,42 @@ class SpectrumMonitor {
       entry.accumulator = std::make_unique<spectral::HarmonicAccumulator>(options_, dt, 0.0);
       probes_.push_back(std::move(entry));
     }
+    dt_ = dt;
+  }
+
+  /// The progress line's note: how far the steady-state detector is, and when it may stop the run
+  /// (the largest change extrapolated geometrically from its last two checks).
+  std::string progress_note(double elapsed) const {
+    if (spectrum_.tolerance <= 0.0 || probes_.empty()) return "";
+    const int periods = probes_.front().accumulator->n_periods();
+    const int earliest = std::max(spectrum_.min_periods, 2 * window_periods_);
+    const double per_period = periods > 0 ? elapsed / periods : 0.0;
+    char text[200];
+    if (!steady_ || periods < earliest) {
+      std::snprintf(text, sizeof text, "steady state: first check at period %d (now %d), in %s", earliest, periods,
+                    duration_text(per_period * (earliest - periods)).c_str());
+      return text;
+    }
+    std::string eta = "not yet converging";
+    if (previous_change_ > 0.0 && steady_->change > 0.0 && steady_->change < previous_change_ &&
+        change_period_ > previous_period_) {
+      const double rate = std::log(steady_->change / previous_change_) / (change_period_ - previous_period_);
+      const double more = std::max(0.0, std::log(spectrum_.tolerance / steady_->change) / rate);
+      eta = "ETA " + duration_text(std::max(0.0, per_period * more - (clock_.seconds() - check_seconds_))) +
+            " at the current rate";
+    }
+    std::snprintf(text, sizeof text, "steady state: change %.2g (tolerance %.2g) at period %d, %s",
+                  steady_->change, spectrum_.tolerance, periods, eta.c_str());
+    return text;
   }
 
   /// Feeds one step; true when every probe's table has settled (the run may stop).
   bool add(const transient::StepView& view) {
     int completed = 0;
     for (std::size_t p = 0; p < probes_.size(); ++p) {
-      completed = probes_[p].accumulator->add(view.time, view.probe_sample[9 * p + probes_[p].component]);
+      const double value = view.probe_sample[9 * p + probes_[p].component];
+      probes_[p].values.push_back(value);
+      completed = probes_[p].accumulator->add(view.time, value);
     }
     if (completed == 0 || spectrum_.tolerance <= 0.0) return false;
     const int periods = probes_.front().accumulator->n_periods();
@@ -235,15 +381,36 @@ class SpectrumMonitor {
       verdict.settled = verdict.settled && state.settled;
       verdict.change = std::max(verdict.change, state.change);
     }
+    if (steady_ && periods > change_period_) {
+      previous_change_ = steady_->change;
+      previous_period_ = change_period_;
+    }
+    change_period_ = periods;
+    check_seconds_ = clock_.seconds();
     steady_ = verdict;
     return verdict.settled;
   }
 
   /// Stage 3: closes the records, writes spectrum.json, the spectra and the plots.
-  void write(const scene::Scene& scene, const std::filesystem::path& directory, const transient::ProbeHistory& history,
-             double dt, std::ostream& out);
+  void write(const scene::Scene& scene, const std::filesystem::path& directory, double dt, std::ostream& out);
 
  private:
+  static std::string duration_text(double seconds) {
+    char buffer[32];
+    if (seconds < 120.0) {
+      std::snprintf(buffer, sizeof buffer, "%.0f s", seconds);
+    } else if (seconds < 7200.0) {
+      std::snprintf(buffer, sizeof buffer, "%.1f min", seconds / 60.0);
+    } else {
+      std::snprintf(buffer, sizeof buffer, "%.1f h", seconds / 3600.0);
+    }
+    return buffer;
+  }
+  double dt_ = 0.0;
+  Stopwatch clock_;             ///< since the monitor was made (the run's start)
+  double check_seconds_ = 0.0;  ///< clock_ at the last steady-state check
+  double previous_change_ = 0.0;
+  int previous_period_ = 0, change_period_ = 0;
   const scene::SpectrumSection& spectrum_;
   spectral::HarmonicOptions options_;
   spectral::SteadyStateCriterion criterion_;
@@ -252,8 +419,8 @@ class SpectrumMonitor {
   std::vector<ProbeSpectrum> probes_;
 };
 
-void SpectrumMonitor::write(const scene::Scene& scene, const std::filesystem::path& directory,
-                            const transient::ProbeHistory& history, double dt, std::ostream& out) {
+void SpectrumMonitor::write(const scene::Scene& scene, const std::filesystem::path& directory, double dt,
+                            std::ostream& out) {
   const double frequency = options_.excitation_frequency_hz;
   nlohmann::json spectrum_json = {{"excitation_hz", frequency}, {"amplitude_convention",
                                   "peak amplitude A_k of x(t) = A_0 + sum A_k cos(2 pi k f t + phi_k), t from the start of the run"}};
@@ -269,8 +436,7 @@ void SpectrumMonitor::write(const scene::Scene& scene, const std::filesystem::pa
   state.periods_used = periods;
   state.limit_reached = !state.settled;
   nlohmann::json probes_json = nlohmann::json::object();
-  const double sample_step = history.time.size() > 1 ? history.time[1] - history.time[0] : dt;
-  const spectral::Sampling sampling{sample_step, history.time.empty() ? 0.0 : history.time.front()};
+  const spectral::Sampling sampling{dt, 0.0};  // every step, from t = 0
   spectral::SpectrumAnalyzer analyzer;
   spectral::PlotOptions plot;
   for (std::size_t p = 0; p < probes_.size(); ++p) {
@@ -278,7 +444,7 @@ void SpectrumMonitor::write(const scene::Scene& scene, const std::filesystem::pa
     const spectral::HarmonicTable table = probe.accumulator->last_table(used);
     const std::string component = axis_name(probe.component);
     probes_json[probe.name] = spectral::probe_json(component, table);
-    const std::vector<double>& values = history.values[9 * p + probe.component];
+    const std::vector<double>& values = probe.values;
     spectral::SpectrumOptions spectrum_options;
     spectrum_options.excitation_frequency_hz = frequency;
     spectrum_options.periods = used;
@@ -448,33 +614,47 @@ void write_ringdown_spectrum(const scene::Scene& scene, const fs::path& director
   io::write_json(directory / "spectrum.json", spectrum_json);
 }
 
-/// Displacement snapshots (VTU) at evenly spaced steps of a run, only when asked.
+/// Displacement snapshots (VTU) at evenly spaced steps of a run, only when asked, and
+/// snapshots.pvd: the collection with their times, rewritten after each one (ParaView plays it as
+/// a time series, also of a run that failed halfway).
 class SnapshotWriter {
  public:
   SnapshotWriter(const std::filesystem::path& directory, const Model& model, const mesh::DofMap& dofs, int count,
                  Index n_steps)
-      : directory_(directory), model_(model), dofs_(dofs) {
-    for (int k = 1; k <= count; ++k) steps_.push_back(std::max<Index>(1, n_steps * k / count) - 1);
-  }
+      : directory_(directory), model_(model), dofs_(dofs), count_(count), n_steps_(n_steps) {}
   void on_step(const transient::StepView& view) {
-    if (next_ >= steps_.size() || view.step < steps_[next_]) return;
+    if (next_ >= count_ || view.step < step_of(next_)) return;
     const mesh::Mesh& mesh = model_.mesh;
     io::PointField field{"displacement", 3, std::vector<double>(3 * static_cast<std::size_t>(mesh.n_nodes()))};
     for (Index node = 0; node < mesh.n_nodes(); ++node) {
       for (int c = 0; c < 3; ++c) field.values[3 * node + c] = view.displacement[dofs_.dof(node, c)];
     }
     char name[32];
-    std::snprintf(name, sizeof name, "snapshot_%04zu.vtu", next_);
+    std::snprintf(name, sizeof name, "snapshot_%04d.vtu", next_);
     io::write_vtu(directory_ / name, mesh, {field});
+    // The displacement is U(i+1), at t_(i+1).
+    collection_ += "    <DataSet timestep=\"" + format_number(view.time + view.dt) + "\" group=\"\" part=\"0\" file=\"" +
+                   name + "\"/>\n";
+    io::write_file_atomic(directory_ / "snapshots.pvd",
+                          "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n" +
+                              collection_ + "  </Collection>\n</VTKFile>\n");
     ++next_;
   }
 
  private:
+  /// The step of snapshot k (0-based): evenly spread, the last at the last step.
+  Index step_of(int k) const {
+    const long long step = static_cast<long long>(n_steps_) * (k + 1) / count_;
+    return static_cast<Index>(std::max<long long>(1, step) - 1);
+  }
+
   std::filesystem::path directory_;
   const Model& model_;
   const mesh::DofMap& dofs_;
-  std::vector<Index> steps_;
-  std::size_t next_ = 0;
+  int count_ = 0;
+  Index n_steps_ = 0;
+  int next_ = 0;
+  std::string collection_;
 };
 
 /// Stage 2: the transient, with the harmonic accumulators fed every step when a spectrum is asked;
@@ -484,6 +664,12 @@ std::unique_ptr<transient::TransientSolver> run_transient_stage(const scene::Sce
                                                                 std::optional<SpectrumMonitor>& spectrum) {
   const scene::TransientSection& section = *scene.transient;
   auto solver = std::make_unique<transient::TransientSolver>(model.system(setup.variant), setup.problem, setup.settings);
+  // The time step is known once the solver is set up: decimate probes.csv, and check the histories
+  // and the snapshots against the memory and the disk before the first step.
+  const Index finished_interval = probe_interval(scene, setup.frequency, solver->dt());
+  solver->set_probe_interval(finished_interval);
+  const double steps = static_cast<double>(solver->n_steps());
+  check_run_outputs(scene, estimate_mesh(scene), steps, std::ceil(steps / finished_interval), directory);
   if (scene.spectrum && setup.frequency > 0.0) spectrum.emplace(scene, setup.frequency, solver->dt());
   SnapshotWriter snapshots(directory, model, solver->dofs(), section.snapshots, solver->n_steps());
   transient::TransientCallbacks callbacks;
@@ -491,9 +677,16 @@ std::unique_ptr<transient::TransientSolver> run_transient_stage(const scene::Sce
     snapshots.on_step(view);
     return spectrum ? spectrum->add(view) : false;
   };
+  if (spectrum) callbacks.progress_note = [&](double elapsed) { return spectrum->progress_note(elapsed); };
+  for (const std::string& warning : setup.warnings) std::cerr << "crackle: warning: " << warning << "\n";
   const transient::TransientSolver& finished = *solver;
-  callbacks.on_finish = [&](const transient::TransientSummary&) {
-    const nlohmann::json extra = setup.contact ? contact::contact_json(setup.contact->contact()) : nlohmann::json::object();
+  callbacks.on_finish = [&](const transient::TransientSummary& summary) {
+    nlohmann::json extra = setup.contact ? contact::contact_json(setup.contact->contact()) : nlohmann::json::object();
+    extra["probes"] = setup.probes_json;
+    extra["probe_interval"] = finished_interval;
+    std::vector<std::string> warnings = setup.warnings;
+    warnings.insert(warnings.end(), summary.warnings.begin(), summary.warnings.end());
+    extra["warnings"] = warnings;
     transient::write_transient_outputs(directory, finished, extra);
   };
   solver->run(callbacks);
@@ -730,15 +923,11 @@ std::optional<modal::ModalResult> run_modal_stage(const scene::Scene& scene, con
   return modes;
 }
 
-void run_run_command(const RunCommandOptions& options, std::ostream& out) {
+namespace {
+
+void run_stages(const scene::Scene& scene, const RunCommandOptions& options, std::ostream& out) {
   Stopwatch total;
-  const scene::Scene scene = scene::load_scene(options.scene_path, parse_overrides(options.overrides));
-  if (!scene.transient) {
-    throw InputError(scene.file + ": transient: expected a transient section for crackle run (crackle modal "
-                     "computes modes alone), got none");
-  }
   const fs::path& directory = options.output_directory;
-  io::ensure_directory(directory);
   const Model model = build_model(scene);
   std::vector<Stage> stages;
 
@@ -782,18 +971,45 @@ void run_run_command(const RunCommandOptions& options, std::ostream& out) {
     Stopwatch clock;
     spectrum_stage.ran = true;
     spectrum_stage.reason = "the scene has a spectrum: section";
-    spectrum->write(scene, directory, solver ? solver->probes() : reduced_probes, dt, out);
+    spectrum->write(scene, directory, dt, out);
     spectrum_stage.seconds = clock.seconds();
   } else if (scene.spectrum) {
     Stopwatch clock;
     spectrum_stage.ran = true;
     spectrum_stage.reason = "the scene has a spectrum: section; no harmonic excitation: ring-down analysis";
-    write_ringdown_spectrum(scene, directory, solver->probes(), setup, modes, out);
+    write_ringdown_spectrum(scene, directory, solver ? solver->probes() : reduced_probes, setup, modes, out);
     spectrum_stage.seconds = clock.seconds();
   }
   stages.push_back(spectrum_stage);
   write_run_json(scene, directory, stages, setup.frequency, total.seconds());
   out << "wrote " << (directory / "run.json").string() << "\n";
+}
+
+}  // namespace
+
+void run_run_command(const RunCommandOptions& options, std::ostream& out) {
+  const scene::Scene scene = scene::load_scene(options.scene_path, parse_overrides(options.overrides));
+  if (!scene.transient) {
+    throw InputError(scene.file + ": transient: expected a transient section for crackle run (crackle modal "
+                     "computes modes alone), got none");
+  }
+  const fs::path& directory = options.output_directory;
+  // Before anything is computed: the folder can be written and is ours (leftovers of an earlier run
+  // removed), and the mesh fits in memory.
+  std::string modal_reason;
+  check_memory(scene, !needed_variants(scene, modal_reason).empty() || !scene.gmsh_file.empty());
+  OutputFolder folder(directory, "run", options.scene_path, options.overwrite, std::cerr);
+  try {
+    run_stages(scene, options, out);
+  } catch (...) {
+    try {
+      folder.finish("failed");
+    } catch (const std::exception&) {
+      // The run's own error says more than a failure to record it.
+    }
+    throw;
+  }
+  folder.finish("done");
 }
 
 }  // namespace crackle::pipeline

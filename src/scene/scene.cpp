@@ -256,7 +256,15 @@ Param build_parameters() {
         number("z", "Range along z.").with_unit("m").list(2),
       }).defaults_to("[]"),
       map_of("snapshots", "Displacement fields written as VTU files.", {
-        integer("count", "Number of snapshots spread evenly over the run (0: none).").at_least(0).defaults_to("0"),
+        integer("count", "Number of snapshots spread evenly over the run (0: none), at most one per step; "
+                         "snapshots.pvd lists them with their times (a time series in ParaView).")
+            .at_least(0).defaults_to("0"),
+      }),
+      map_of("history", "Probe histories written to probes.csv; the harmonic analysis and the spectra take "
+                        "every step regardless.", {
+        integer("samples_per_period", "Rows of probes.csv per excitation period (per pulse duration for a "
+                                      "pulse; without an excitation every step is written); all: every step.")
+            .at_least(2).or_word("all").defaults_to("64"),
       }),
       boolean("progress", "Progress line with ETA on the terminal.").defaults_to("true"),
     }).optional_section(),
@@ -620,6 +628,9 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
                   std::to_string(transient.snapshots));
     }
   }
+  transient.history_samples_per_period = values.is_word("transient.history.samples_per_period")
+                                             ? 0
+                                             : values.integer("transient.history.samples_per_period");
   transient.progress = values.flag("transient.progress");
   if (transient.variant == "open" && !scene.has_crack()) transient.variant = "uncracked";
   return transient;
@@ -688,8 +699,12 @@ Scene scene_from(const Values& values) {
   if (values.has("mesh.gmsh")) {
     scene.gmsh_file = mesh_file_path(values.file(), values.word("mesh.gmsh"));
     std::error_code error;
-    if (std::filesystem::is_directory(scene.gmsh_file, error))
+    const std::filesystem::file_status status = std::filesystem::status(scene.gmsh_file, error);
+    if (std::filesystem::is_directory(status))
       values.fail("mesh.gmsh", "a Gmsh mesh file", "a directory, '" + scene.gmsh_file + "'");
+    // A device or a pipe (/dev/zero, /dev/stdin) never ends: the reader would fill the memory.
+    if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
+      values.fail("mesh.gmsh", "a Gmsh mesh file", "a device or pipe, '" + scene.gmsh_file + "'");
   } else {
     scene.box.origin = vec3(values.numbers("mesh.box.origin"));
     scene.box.size = vec3(values.numbers("mesh.box.size"));
@@ -780,10 +795,28 @@ Scene scene_from(const Values& values) {
   if (values.has("transient")) scene.transient = transient_from(values, scene);
   if (values.has("spectrum")) scene.spectrum = spectrum_from(values, scene);
   if (values.has("sweep")) scene.sweep = sweep_from(values, scene);
+  std::vector<std::string> named = {"mesh.box.cells", "mesh.box.order", "mesh.gmsh", "transient.periods",
+                                    "transient.duration", "transient.time_step", "transient.snapshots.count",
+                                    "transient.history.samples_per_period", "transient.excitation.point",
+                                    "transient.excitation.frequency", "transient.excitation.frequency.hz",
+                                    "spectrum.harmonics"};
+  if (scene.transient) {
+    for (std::size_t i = 0; i < scene.transient->probes.size(); ++i)
+      named.push_back("transient.probes[" + std::to_string(i) + "].point");
+  }
+  for (const std::string& key : named) {
+    if (values.has(key)) scene.key_lines[key] = values.line(key);
+  }
   return scene;
 }
 
 }  // namespace
+
+std::string Scene::where(const std::string& key_path) const {
+  const auto found = key_lines.find(key_path);
+  const int line = found == key_lines.end() ? -1 : found->second;
+  return file + (line > 0 ? ":" + std::to_string(line) : "") + ": " + key_path;
+}
 
 const Param& scene_parameters() {
   static const Param root = build_parameters();

@@ -6,6 +6,7 @@
 /// reports `file:line: key.path: expected ..., got ...` as an InputError. The same table generates
 /// docs/scene-format.md.
 #include <array>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -152,6 +153,9 @@ struct TransientSection {
   std::vector<InitialSection> initial;
   std::optional<ReleaseSection> release;
   int snapshots = 0;
+  /// Probe rows written to probes.csv per excitation period (per pulse duration for a pulse);
+  /// 0: every step. The harmonic analysis takes every step regardless.
+  int history_samples_per_period = 64;
   bool progress = true;
 };
 
@@ -206,6 +210,11 @@ struct Scene {
   std::optional<TransientSection> transient;
   std::optional<SpectrumSection> spectrum;
   std::optional<SweepSection> sweep;
+  /// 1-based line of some keys (those the pipeline may have to name after loading: mesh size,
+  /// run length, snapshots, probe and load points); absent or <= 0 when not from the file.
+  std::map<std::string, int> key_lines;
+  /// "file:line: key.path" (the line left out when unknown), the start of a message about a key.
+  std::string where(const std::string& key_path) const;
 };
 
 struct Param;

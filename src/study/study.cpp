@@ -269,6 +269,7 @@ Job StudyRun::case_job(int index) {
       argv.push_back("--modal-cache");
       argv.push_back(cache_path(study_case.modal_key).string());
     }
+    argv.push_back("--overwrite");  // the case folder holds the study's scene.yaml and log.txt
     job.commands.push_back({command, argv});
   }
   return job;
@@ -287,7 +288,7 @@ Job StudyRun::primer_job(const std::string& key, int index) {
   io::write_file_atomic(scene, plan_.cases[index].primer_text);
   job.commands.push_back({"modal",
                           {executable_.string(), "modal", scene.string(), "-o", job.folder.string(),
-                           "--modal-cache", cache_path(key).string()}});
+                           "--modal-cache", cache_path(key).string(), "--overwrite"}});
   return job;
 }
 
@@ -490,6 +491,7 @@ int StudyRun::run() {
   if (options_.executable.empty() || !fs::is_regular_file(executable_, error) ||
       ::access(executable_.c_str(), X_OK) != 0)
     throw InputError("study: the case executable '" + options_.executable + "' is not an executable file");
+  io::check_writable_directory(directory_);  // before any case runs, not when the tables are written
   io::ensure_directory(directory_ / "cases");
   const DirectoryLock lock(directory_ /
                            (n_ranks_ > 1 ? ".study-rank" + std::to_string(rank_) + ".lock" : ".study.lock"));

@@ -109,17 +109,19 @@ struct TransientSolver::Impl final : SecondOrderSystem {
   void choose_time_step();
   void set_initial_state();
   void record_probes(Index i, const std::vector<double>& before, std::vector<double>& sample, double time);
-  void progress_line(Index i, double elapsed) const;
+  void progress_line(Index i, double elapsed, const std::string& note) const;
   void integrate(const TransientCallbacks& callbacks);
 };
 
 void TransientSolver::Impl::check_options() const {
   const TransientOptions& o = options;
+  const std::string length_key = o.run_length_key.empty() ? "transient.periods / transient.duration" : o.run_length_key;
+  const std::string step_key = o.time_step_key.empty() ? "transient.time_step" : o.time_step_key;
   if (!(o.end_time > 0.0) || !std::isfinite(o.end_time)) {
-    throw InputError("transient.periods / transient.duration: expected a run time > 0 s, got " + format_number(o.end_time));
+    throw InputError(length_key + ": expected a run time > 0 s, got " + format_number(o.end_time));
   }
   if (!(o.time_step >= 0.0) || !std::isfinite(o.time_step)) {
-    throw InputError("transient.time_step: expected a time >= 0 s (0 = automatic), got " + format_number(o.time_step));
+    throw InputError(step_key + ": expected a time >= 0 s (0 = automatic), got " + format_number(o.time_step));
   }
   if (o.energy_interval < 1 || o.probe_interval < 1) {
     throw InputError("transient: expected energy_interval >= 1 and probe_interval >= 1, got " +
@@ -169,7 +171,10 @@ void TransientSolver::Impl::choose_time_step() {
                              format_number(estimate.omega_max) + " rad/s" +
                              (bounded_by_terms ? " with the contact springs" : std::string()) +
                              (beta > 0.0 ? ", beta = " + format_number(beta) + " s" : std::string()) + ")";
-    if (!o.force_time_step) throw InputError("transient.time_step: " + text + "; use a smaller one or force it");
+    if (!o.force_time_step) {
+      throw InputError((o.time_step_key.empty() ? "transient.time_step" : o.time_step_key) + ": " + text +
+                       "; use a smaller one or force it");
+    }
     summary.time_step_forced = true;
     warn(text + ": forced");
   }
@@ -184,8 +189,9 @@ void TransientSolver::Impl::choose_time_step() {
   }
   const double ratio = o.end_time / dt;
   if (ratio > 2e9) {
-    throw InputError("transient.periods / transient.duration: the run time over dt = " + format_number(dt) +
-                     " s is " + format_number(ratio) + " steps, more than 2e9");
+    throw InputError((o.run_length_key.empty() ? "transient.periods / transient.duration" : o.run_length_key) +
+                     ": expected a run of at most 2e9 steps, got " + format_number(o.end_time) + " s over dt = " +
+                     format_number(dt) + " s, " + format_number(ratio) + " steps");
   }
   steps = std::max<Index>(1, static_cast<Index>(std::ceil(ratio - 1e-9)));
 }
@@ -265,11 +271,12 @@ void TransientSolver::Impl::record_probes(Index i, const std::vector<double>& be
   }
 }
 
-void TransientSolver::Impl::progress_line(Index i, double elapsed) const {
+void TransientSolver::Impl::progress_line(Index i, double elapsed, const std::string& note) const {
   const double done = static_cast<double>(i + 1) / static_cast<double>(steps);
-  std::fprintf(stderr, "transient: step %lld/%lld (%.1f%%), t = %.4g s, elapsed %s, ETA %s\n",
+  std::fprintf(stderr, "transient: step %lld/%lld (%.1f%%), t = %.4g s, elapsed %s, ETA %s to the end time%s%s\n",
                static_cast<long long>(i + 1), static_cast<long long>(steps), 100.0 * done, summary.time,
-               seconds_text(elapsed).c_str(), seconds_text(elapsed * (1.0 - done) / done).c_str());
+               seconds_text(elapsed).c_str(), seconds_text(elapsed * (1.0 - done) / done).c_str(),
+               note.empty() ? "" : "; ", note.c_str());
 }
 
 namespace {
@@ -427,7 +434,7 @@ void TransientSolver::Impl::integrate(const TransientCallbacks& callbacks) {
     }
     if (o.progress && (i & 63) == 63 && wall.seconds() - last_progress >= o.progress_interval) {
       last_progress = wall.seconds();
-      progress_line(i, last_progress);
+      progress_line(i, last_progress, callbacks.progress_note ? callbacks.progress_note(last_progress) : "");
     }
   }
   if (summary.status == "running") summary.status = "completed";
@@ -462,6 +469,10 @@ double TransientSolver::dt() const { return impl_->dt; }
 Index TransientSolver::n_steps() const { return impl_->steps; }
 const fem::ElasticOperator& TransientSolver::elastic_operator() const { return *impl_->elastic; }
 const VectorX& TransientSolver::lumped_mass() const { return impl_->system->lumped_mass(); }
+void TransientSolver::set_probe_interval(Index steps) {
+  if (steps < 1) throw InputError("transient: expected probe_interval >= 1, got " + std::to_string(steps));
+  impl_->options.probe_interval = static_cast<int>(steps);
+}
 const TransientSummary& TransientSolver::summary() const { return impl_->summary; }
 const ProbeHistory& TransientSolver::probes() const { return impl_->probe_history; }
 const EnergyHistory& TransientSolver::energy() const { return impl_->energy_history; }

@@ -62,6 +62,10 @@ struct TransientOptions {
   double growth_factor = 10.0;
   int probe_interval = 1;          ///< steps between probe rows
   bool progress = true;            ///< progress line with ETA on stderr
+  /// How messages name the run length and the time step (`file:line: transient.periods`); the
+  /// bare key names when empty.
+  std::string run_length_key;
+  std::string time_step_key;
   double progress_interval = 1.0;  ///< [s] between progress lines
   fem::ElasticOperatorOptions elastic;
 };
@@ -138,6 +142,9 @@ struct TransientCallbacks {
   std::function<bool(const StepView&)> on_step;
   /// Called once when the run ends, also when it fails (before the exception leaves run()).
   std::function<void(const TransientSummary&)> on_finish;
+  /// Text appended to each progress line (e.g. how far the steady-state detector is, with its
+  /// own ETA): the line's ETA counts to the end time, a run that stops early ends sooner.
+  std::function<std::string(double elapsed_s)> progress_note;
 };
 
 /// A transient run. The constructor builds everything and checks the time step (InputError for a
@@ -159,6 +166,9 @@ class TransientSolver {
   Index n_steps() const;
   const fem::ElasticOperator& elastic_operator() const;
   const VectorX& lumped_mass() const;              ///< eq. (27), per DOF, all DOFs
+
+  /// Steps between probe rows (TransientOptions::probe_interval), set before run().
+  void set_probe_interval(Index steps);
 
   /// Integrates to end_time (or until a callback asks to stop). SolverError when the health
   /// checks fail (NaN/Inf, energy growth, energy balance), after on_finish.

@@ -1,0 +1,276 @@
+// `crackle run`, `modal` and `check` at the edges, on the built executable: scenes that cannot fit
+// in memory are refused before anything is built, points outside the body are refused, output
+// folders are checked before the computation and owned by the run that writes them (a rerun leaves
+// no debris of an earlier or killed run), probes.csv is decimated, snapshots come with a .pvd, and
+// late messages name the key and the line.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A 10 x 1 x 1 cantilever of p = 1 with a half-depth edge crack, driven at 100 Hz for 4 periods.
+const char* kScene = R"(mesh:
+  box: {size: [0.2, 0.02, 0.01], cells: [10, 1, 1], order: 1}
+material: {E: 210.0e9, nu: 0.3, rho: 7850.0}
+boundary:
+  - {face: x-, fix: [x, y, z]}
+crack:
+  plane: {normal: x, at: 0.04}
+  region: {y: [0.0, 0.02], z: [0.005, 0.01]}
+transient:
+  excitation: {face: x+, direction: z, amplitude: 20.0, frequency: 100}
+  periods: 4
+  progress: false
+  probes:
+    - {name: tip, point: [0.2, 0.01, 0.01]}
+spectrum:
+  harmonics: 3
+  steady_state: {tolerance: 0, min_periods: 2, window_periods: 2}
+  plots: false
+)";
+
+struct Result {
+  int exit_code = -1;
+  std::string output;  ///< stdout and stderr together
+};
+
+fs::path scratch() {
+  static const fs::path dir = fs::temp_directory_path() / ("crackle-run-edges-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir;
+}
+
+fs::path scene_file(const std::string& name = "small.yaml", const std::string& text = kScene) {
+  const fs::path path = scratch() / name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+Result crackle(const std::string& arguments) {
+  const std::string command = std::string(CRACKLE_BINARY_DIR) + "/apps/crackle " + arguments + " 2>&1";
+  Result result;
+  FILE* pipe = popen(command.c_str(), "r");
+  std::array<char, 4096> buffer;
+  while (std::fgets(buffer.data(), buffer.size(), pipe)) result.output += buffer.data();
+  const int status = pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+Result run(const std::string& folder, const std::string& extra = "", const fs::path& scene = scene_file()) {
+  return crackle("run " + scene.string() + " -o " + (scratch() / folder).string() + " -q " + extra);
+}
+
+nlohmann::json read_json(const fs::path& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+std::size_t line_count(const fs::path& path) {
+  std::ifstream in(path);
+  std::size_t lines = 0;
+  for (std::string line; std::getline(in, line);) ++lines;
+  return lines;
+}
+
+}  // namespace
+
+TEST(RunEdges, MeshesThatCannotFitInMemoryAreRefusedBeforeMeshing) {
+  const std::string scene = scene_file().string();
+  for (const std::string cells : {"[100000,100000,100000]", "[1000000000,1,1]"}) {
+    for (const std::string command : {"check ", "modal ", "run "}) {
+      SCOPED_TRACE(command + cells);
+      const std::string output = command == "check " ? "" : " -o " + (scratch() / "memory").string();
+      const Result result = crackle(command + scene + output + " --set 'mesh.box.cells=" + cells + "'");
+      EXPECT_EQ(result.exit_code, 2) << result.output;
+      EXPECT_NE(result.output.find("mesh.box.cells: expected a mesh that fits in memory, got " + cells.substr(0, 7)),
+                std::string::npos)
+          << result.output;
+      EXPECT_NE(result.output.find("available (MemAvailable in /proc/meminfo"), std::string::npos) << result.output;
+      EXPECT_EQ(result.output.find("bad_alloc"), std::string::npos) << result.output;
+    }
+  }
+  EXPECT_FALSE(fs::exists(scratch() / "memory"));  // refused before anything was written
+  // The key's line is named when the value comes from the file.
+  std::string text = kScene;
+  text.replace(text.find("cells: [10, 1, 1]"), 17, "cells: [100000, 100000, 100000]");
+  const Result from_file = crackle("check " + scene_file("huge.yaml", text).string());
+  EXPECT_EQ(from_file.exit_code, 2);
+  EXPECT_NE(from_file.output.find("huge.yaml:2: mesh.box.cells: expected a mesh that fits in memory"), std::string::npos)
+      << from_file.output;
+}
+
+TEST(RunEdges, DevicesAsMeshFilesAndTooManySnapshotsAreRefused) {
+  const Result device = crackle("check " + scene_file().string() + " --set 'mesh={gmsh: /dev/zero}'");
+  EXPECT_EQ(device.exit_code, 2) << device.output;
+  EXPECT_NE(device.output.find("mesh.gmsh: expected a Gmsh mesh file, got a device or pipe, '/dev/zero'"),
+            std::string::npos)
+      << device.output;
+  const Result snapshots = run("snapshots", "--set transient.snapshots.count=1000000000");
+  EXPECT_EQ(snapshots.exit_code, 2) << snapshots.output;
+  EXPECT_NE(snapshots.output.find("transient.snapshots.count: expected at most one snapshot per step"),
+            std::string::npos)
+      << snapshots.output;
+  EXPECT_EQ(snapshots.output.find("bad_alloc"), std::string::npos);
+}
+
+TEST(RunEdges, PointsOutsideTheBodyAreRefusedAndSnappingDistancesReported) {
+  const Result probe = run("outside", "--set 'transient.probes[0].point=[10,10,10]'");
+  EXPECT_EQ(probe.exit_code, 2) << probe.output;
+  EXPECT_NE(probe.output.find("transient.probes[0].point: expected a point in the body (bounding box [0, 0.2] x "
+                              "[0, 0.02] x [0, 0.01] m), got (10, 10, 10)"),
+            std::string::npos)
+      << probe.output;
+  EXPECT_FALSE(fs::exists(scratch() / "outside"));  // bad input found late still writes nothing
+  const Result load = run("outside-load", "--set 'transient.excitation={point: [0.2, 0.01, 0.5], amplitude: 1, "
+                                          "frequency: 100}'");
+  EXPECT_EQ(load.exit_code, 2) << load.output;
+  EXPECT_NE(load.output.find("transient.excitation.point: expected a point in the body"), std::string::npos)
+      << load.output;
+
+  // A point inside snaps to its nearest node; transient.json says how far that is.
+  const Result inside = run("inside", "--set 'transient.probes[0].point=[0.199, 0.02, 0.0099]'");
+  ASSERT_EQ(inside.exit_code, 0) << inside.output;
+  const nlohmann::json transient = read_json(scratch() / "inside" / "transient.json");
+  ASSERT_EQ(transient["probes"].size(), 1u);
+  EXPECT_EQ(transient["probes"][0]["name"], "tip");
+  EXPECT_NEAR(transient["probes"][0]["distance_m"].get<double>(), std::hypot(0.001, 0.0001), 1e-9);
+  EXPECT_TRUE(transient["warnings"].empty()) << transient["warnings"];
+}
+
+TEST(RunEdges, AProbeOnAClampedFaceIsAWarning) {
+  const Result result = crackle("run " + scene_file().string() + " -o " + (scratch() / "clamped").string() +
+                                " -q --set 'transient.probes[0].point=[0, 0.01, 0.01]'");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const std::string warning = "probe 'tip' (node ";
+  EXPECT_NE(result.output.find("crackle: warning: " + warning), std::string::npos) << result.output;
+  EXPECT_NE(result.output.find("held by a boundary condition"), std::string::npos) << result.output;
+  const nlohmann::json transient = read_json(scratch() / "clamped" / "transient.json");
+  ASSERT_FALSE(transient["warnings"].empty());
+  EXPECT_EQ(transient["warnings"][0].get<std::string>().rfind(warning, 0), 0u) << transient["warnings"];
+}
+
+TEST(RunEdges, UnwritableOutputFoldersFailBeforeTheComputation) {
+  const fs::path file = scratch() / "a-file";
+  std::ofstream(file) << "not a folder\n";
+  const std::string scene = scene_file().string();
+  for (const std::string command : {"run ", "modal "}) {
+    for (const fs::path& folder : {file, file / "below", fs::path("/proc/version/out")}) {
+      SCOPED_TRACE(command + folder.string());
+      const Result result = crackle(command + scene + " -o " + folder.string() + " --set modal.modes=2");
+      EXPECT_EQ(result.exit_code, 4) << result.output;
+      EXPECT_NE(result.output.find("crackle: error: " + folder.string() + ": cannot"), std::string::npos)
+          << result.output;
+      EXPECT_EQ(result.output.find("transient:"), std::string::npos) << result.output;  // nothing computed
+    }
+  }
+  std::string study = kScene;
+  study += "study:\n  vary: {transient.excitation.amplitude: [10, 20]}\n  outputs: [spectrum]\n";
+  const Result result = crackle("study " + scene_file("study.yaml", study).string() + " -o " + (file / "s").string());
+  EXPECT_EQ(result.exit_code, 4) << result.output;
+  EXPECT_NE(result.output.find((file / "s").string() + ": cannot"), std::string::npos) << result.output;
+}
+
+TEST(RunEdges, ARerunRemovesTheDebrisOfAKilledRunAndRefusesForeignFiles) {
+  const fs::path folder = scratch() / "rerun";
+  ASSERT_EQ(run("rerun", "--set transient.snapshots.count=3").exit_code, 0);
+  EXPECT_TRUE(fs::exists(folder / "snapshot_0002.vtu"));
+  EXPECT_TRUE(fs::exists(folder / "crackle-run.json"));
+  // What kill -9 in the middle of a write and an earlier, longer run leave behind.
+  std::ofstream(folder / "probes.csv.tmp.4242") << "time [s]\n0.1\n";
+  std::ofstream(folder / "snapshot_0099.vtu") << "<VTKFile/>\n";
+  const Result rerun = run("rerun", "--set transient.snapshots.count=2");
+  ASSERT_EQ(rerun.exit_code, 0) << rerun.output;
+  EXPECT_NE(rerun.output.find("crackle: note: " + folder.string() + ": removed"), std::string::npos) << rerun.output;
+  EXPECT_NE(rerun.output.find("leftover(s) of an interrupted write (probes.csv.tmp.4242)"), std::string::npos)
+      << rerun.output;
+  EXPECT_FALSE(fs::exists(folder / "probes.csv.tmp.4242"));
+  EXPECT_FALSE(fs::exists(folder / "snapshot_0099.vtu"));
+  EXPECT_FALSE(fs::exists(folder / "snapshot_0002.vtu"));
+  EXPECT_TRUE(fs::exists(folder / "snapshot_0001.vtu"));
+  for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
+    EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << entry.path();
+  }
+  const nlohmann::json marker = read_json(folder / "crackle-run.json");
+  EXPECT_EQ(marker["commands"]["run"]["status"], "done");
+  EXPECT_EQ(marker["commands"]["run"]["files"].size(), 9u) << marker;  // 2 snapshots, pvd, 6 files
+
+  // A folder with files crackle run did not write is refused, or written into with --overwrite.
+  std::ofstream(folder / "notes.txt") << "mine\n";
+  const Result refused = run("rerun");
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("got files crackle run does not own: notes.txt; choose another folder (-o), or pass "
+                                "--overwrite"),
+            std::string::npos)
+      << refused.output;
+  EXPECT_TRUE(fs::exists(folder / "probes.csv"));  // nothing was removed
+  ASSERT_EQ(run("rerun", "--overwrite").exit_code, 0);
+  EXPECT_TRUE(fs::exists(folder / "notes.txt"));
+}
+
+TEST(RunEdges, ProbesCsvIsDecimatedAndSnapshotsComeWithAPvd) {
+  ASSERT_EQ(run("decimated", "--set transient.snapshots.count=4").exit_code, 0);
+  ASSERT_EQ(run("every-step", "--set transient.history.samples_per_period=all").exit_code, 0);
+  const nlohmann::json transient = read_json(scratch() / "decimated" / "transient.json");
+  const long long steps = transient["steps"];
+  const long long interval = transient["probe_interval"];
+  const double steps_per_period = steps / 4.0;
+  EXPECT_EQ(interval, static_cast<long long>(steps_per_period / 64));
+  EXPECT_GE(steps_per_period / interval, 64.0);
+  EXPECT_EQ(line_count(scratch() / "decimated" / "probes.csv"), 1 + (steps + interval - 1) / interval);
+  EXPECT_EQ(line_count(scratch() / "every-step" / "probes.csv"), 1 + static_cast<std::size_t>(steps));
+  // The spectrum takes every step either way.
+  const nlohmann::json a = read_json(scratch() / "decimated" / "spectrum.json");
+  const nlohmann::json b = read_json(scratch() / "every-step" / "spectrum.json");
+  EXPECT_EQ(a["probes"]["tip"].dump(), b["probes"]["tip"].dump());
+  EXPECT_EQ(line_count(scratch() / "decimated" / "spectrum_tip.csv"),
+            line_count(scratch() / "every-step" / "spectrum_tip.csv"));
+
+  std::ifstream pvd(scratch() / "decimated" / "snapshots.pvd");
+  const std::string text((std::istreambuf_iterator<char>(pvd)), std::istreambuf_iterator<char>());
+  const std::regex dataset("<DataSet timestep=\"([0-9.e-]+)\" group=\"\" part=\"0\" file=\"(snapshot_000[0-9].vtu)\"/>");
+  std::vector<double> times;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), dataset); it != std::sregex_iterator(); ++it) {
+    times.push_back(std::stod((*it)[1]));
+    EXPECT_TRUE(fs::exists(scratch() / "decimated" / (*it)[2].str()));
+  }
+  ASSERT_EQ(times.size(), 4u) << text;
+  const double end = transient["time"];
+  for (int k = 0; k < 4; ++k) EXPECT_NEAR(times[k], end * (k + 1) / 4.0, 1.01 * end / steps);
+}
+
+TEST(RunEdges, LateMessagesNameTheKeyAndTheLine) {
+  std::string text = kScene;
+  text.replace(text.find("frequency: 100"), 14, "frequency: 1e12");
+  const Result nyquist = run("nyquist", "", scene_file("fast.yaml", text));
+  EXPECT_EQ(nyquist.exit_code, 2) << nyquist.output;
+  EXPECT_NE(nyquist.output.find("fast.yaml:10: transient.excitation.frequency: expected a frequency whose harmonic 3 "
+                                "(spectrum.harmonics) lies below the Nyquist frequency"),
+            std::string::npos)
+      << nyquist.output;
+  const Result overridden = run("nyquist", "--set transient.excitation.frequency=1e12");
+  EXPECT_NE(overridden.output.find("small.yaml: transient.excitation.frequency"), std::string::npos)
+      << overridden.output;
+
+  const Result steps = run("steps", "--set transient.periods=1e9");
+  EXPECT_EQ(steps.exit_code, 2) << steps.output;
+  EXPECT_NE(steps.output.find("small.yaml: transient.periods: expected a run of at most 2e9 steps"), std::string::npos)
+      << steps.output;
+  text = kScene;
+  text.replace(text.find("periods: 4"), 10, "periods: 1e9");
+  const Result from_file = run("steps", "", scene_file("long.yaml", text));
+  EXPECT_NE(from_file.output.find("long.yaml:11: transient.periods: expected a run of at most 2e9 steps"),
+            std::string::npos)
+      << from_file.output;
+  EXPECT_FALSE(fs::exists(scratch() / "steps"));
+}
