@@ -24,13 +24,14 @@ bool is_modal_output(const std::string& name) {
   return name == "modal.json" || name == "modes.csv" || name == "modes_uncracked.vtu" || name == "modes_open.vtu";
 }
 
-/// Output names of `crackle run` besides the modal ones.
+/// Output names of `crackle run` besides the modal ones (the plots come with their gnuplot data and
+/// script).
 bool is_run_output(const std::string& name) {
   return name == "run.json" || name == "transient.json" || name == "probes.csv" || name == "energy.csv" ||
          name == "spectrum.json" || name == "snapshots.pvd" ||
          (starts_with(name, "snapshot_") && ends_with(name, ".vtu")) ||
-         (starts_with(name, "spectrum_") && (ends_with(name, ".csv") || ends_with(name, ".png"))) ||
-         (starts_with(name, "history_") && ends_with(name, ".png"));
+         ((starts_with(name, "spectrum_") || starts_with(name, "history_")) &&
+          (ends_with(name, ".csv") || ends_with(name, ".png") || ends_with(name, ".dat") || ends_with(name, ".gp")));
 }
 
 /// Names of a study's own folder (`crackle study -o DIR`).
