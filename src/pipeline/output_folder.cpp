@@ -30,7 +30,8 @@ bool is_run_output(const std::string& name) {
   return name == "run.json" || name == "transient.json" || name == "probes.csv" || name == "energy.csv" ||
          name == "spectrum.json" || name == "snapshots.pvd" ||
          (starts_with(name, "snapshot_") && ends_with(name, ".vtu")) ||
-         ((starts_with(name, "spectrum_") || starts_with(name, "history_")) &&
+         ((starts_with(name, "spectrum_") || starts_with(name, "history_") || starts_with(name, "ringdown_") ||
+           starts_with(name, "frf_")) &&
           (ends_with(name, ".csv") || ends_with(name, ".png") || ends_with(name, ".dat") || ends_with(name, ".gp")));
 }
 
