@@ -1,10 +1,10 @@
-#include <algorithm>
 /// \file The `crackle` executable: `crackle check|modal|... scene.yaml`.
 ///
 /// The command line is strict: an unknown option or argument is an error (with a "did you mean"
 /// suggestion), out-of-range values are errors naming the option, and every bad command line
 /// exits 2 like any other bad input. PETSc/SLEPc options reach PETSc only through an explicit
 /// channel: after `--`, as `--petsc "-opt value"`, or in the PETSC_OPTIONS environment variable.
+#include <algorithm>
 #include <CLI/CLI.hpp>
 #include <cstdlib>
 #include <iostream>
