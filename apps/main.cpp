@@ -4,6 +4,7 @@
 /// suggestion), out-of-range values are errors naming the option, and every bad command line
 /// exits 2 like any other bad input. PETSc/SLEPc options reach PETSc only through an explicit
 /// channel: after `--`, as `--petsc "-opt value"`, or in the PETSC_OPTIONS environment variable.
+#include <algorithm>
 #include <CLI/CLI.hpp>
 #include <cstdlib>
 #include <iostream>
@@ -107,7 +108,13 @@ std::string unexpected_argument(const CLI::App& command, const std::vector<std::
     const std::string option = argument.substr(0, argument.find('='));
     std::string hint = scene::suggestion(option, option_names(command));
     if (hint.empty() && option.rfind("--", 0) == 0) {
-      const std::vector<std::string> keys = scene_keys_named(option.substr(2));
+      std::vector<std::string> keys = scene_keys_named(option.substr(2));
+      // Several keys of that name (modal.modes, transient.reduced.modes): the shallowest one, if unique.
+      const auto depth = [](const std::string& key) { return std::count(key.begin(), key.end(), '.'); };
+      if (keys.size() > 1) {
+        std::sort(keys.begin(), keys.end(), [&](const std::string& a, const std::string& b) { return depth(a) < depth(b); });
+        if (depth(keys[0]) < depth(keys[1])) keys.resize(1);
+      }
       std::string value = argument.find('=') != std::string::npos ? argument.substr(argument.find('=') + 1)
                           : i + 1 < rest.size() && rest[i + 1][0] != '-' ? rest[i + 1]
                                                                             : "VALUE";
