@@ -25,7 +25,7 @@ void run_modal_command(const ModalCommandOptions& options, std::ostream& out) {
   scene::ModalSection section = scene.modal;
   if (options.modes > 0) section.modes = options.modes;
   if (!options.solver.empty()) section.solver = options.solver;
-  const Model model = build_model(scene);
+  const Model model = build_model(scene, MeshUse::modal);
   const bool writer = modal::is_output_rank();
   // Fail on an unwritable output directory before the solve, not after it.
   if (writer) io::ensure_directory(options.output_directory);
