@@ -410,6 +410,10 @@ class Validator {
         value.numbers.push_back(number);
         break;
       case Kind::integer: {
+        if (!param.word_alternative.empty() && text == param.word_alternative && !is_quoted(node)) {
+          value.words.push_back(text);
+          break;
+        }
         long long whole = 0;
         if (is_quoted(node) || !parse_integer(text, whole)) {
           fail(path, line, expected,
