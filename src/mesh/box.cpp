@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "core/errors.hpp"
@@ -40,7 +41,75 @@ std::string range_text(double low, double high) {
   return "[" + format_number(low) + ", " + format_number(high) + "]";
 }
 
+/// Adds the graded lines around `front` along one axis: at front -/+ h_side ratio^k, k = 1..layers,
+/// h_side the distance from the front to the next line on that side (before grading).
+/// The neighbours are looked up in `base` (the lines before any grading), so that fronts graded
+/// one after the other do not depend on the order.
+void add_graded_lines(const std::vector<double>& base, std::vector<double>& lines, double front,
+                      const Grading& grading, double tol) {
+  const auto above = std::upper_bound(base.begin(), base.end(), front + tol);
+  if (above == base.begin() || above == base.end()) return;
+  const double next = *above;
+  auto below = above - 1;
+  if (std::abs(*below - front) <= tol) {
+    if (below == base.begin()) return;
+    --below;
+  }
+  const double previous = *below;
+  std::vector<double> added;
+  for (int k = 1; k <= grading.layers; ++k) {
+    const double factor = std::pow(grading.ratio, k);
+    added.push_back(front - (front - previous) * factor);
+    added.push_back(front + (next - front) * factor);
+  }
+  for (double position : added) {
+    if (find_line(lines, position, tol) >= 0) continue;
+    lines.insert(std::upper_bound(lines.begin(), lines.end(), position), position);
+  }
+}
+
 }  // namespace
+
+int auto_layers(int order, double cell_size, double thinnest_side) {
+  const int layers = order - 1 + static_cast<int>(std::lround(std::log2(thinnest_side / cell_size)));
+  return std::clamp(layers, 1, kMaxAutoLayers);
+}
+
+double max_aspect_ratio(const std::array<std::vector<double>, 3>& lines) {
+  std::array<double, 3> shortest{}, longest{};
+  for (int axis = 0; axis < 3; ++axis) {
+    shortest[axis] = std::numeric_limits<double>::infinity();
+    longest[axis] = 0.0;
+    for (std::size_t k = 0; k + 1 < lines[axis].size(); ++k) {
+      const double width = lines[axis][k + 1] - lines[axis][k];
+      shortest[axis] = std::min(shortest[axis], width);
+      longest[axis] = std::max(longest[axis], width);
+    }
+  }
+  // On a tensor grid every combination of widths is a cell: the worst is a longest width of one
+  // axis against a shortest of another.
+  double worst = 1.0;
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b)
+      if (a != b && shortest[b] > 0.0) worst = std::max(worst, longest[a] / shortest[b]);
+  return worst;
+}
+
+double max_aspect_ratio(const Mesh& mesh) {
+  double worst = 1.0;
+  const Index per_element = mesh.nodes_per_element();
+  for (Index e = 0; e < mesh.n_elements(); ++e) {
+    Vec3 low = Vec3::Constant(std::numeric_limits<double>::infinity()), high = -low;
+    for (Index a = 0; a < per_element; ++a) {
+      const Vec3& x = mesh.nodes[mesh.element_nodes(e)[a]];
+      low = low.cwiseMin(x);
+      high = high.cwiseMax(x);
+    }
+    const Vec3 extent = high - low;
+    if (extent.minCoeff() > 0.0) worst = std::max(worst, extent.maxCoeff() / extent.minCoeff());
+  }
+  return worst;
+}
 
 const std::array<std::string, 6>& box_face_names() {
   static const std::array<std::string, 6> names = {"x-", "x+", "y-", "y+", "z-", "z+"};
@@ -81,6 +150,19 @@ std::string check_crack(const BoxSpec& box, const CrackSpec& crack) {
   return "";
 }
 
+Grading resolve_grading(const BoxSpec& box, const CrackSpec& crack) {
+  Grading grading = box.grading;
+  if (grading.layers != kAutoLayers) return grading;
+  double cell = box.size[crack.normal] / box.cells[crack.normal];
+  for (int t : in_plane_axes(crack.normal)) {
+    for (double edge : crack.region[t])
+      if (edge > box.origin[t] + tolerance(box, t) && edge < box.origin[t] + box.size[t] - tolerance(box, t))
+        cell = std::max(cell, box.size[t] / box.cells[t]);
+  }
+  grading.layers = auto_layers(box.order, cell, box.size.minCoeff());
+  return grading;
+}
+
 std::array<std::vector<double>, 3> grid_lines(const BoxSpec& box, const std::optional<CrackSpec>& crack) {
   std::array<std::vector<double>, 3> lines;
   auto add_line = [&](int axis, double position) {
@@ -96,6 +178,23 @@ std::array<std::vector<double>, 3> grid_lines(const BoxSpec& box, const std::opt
   for (int t : in_plane_axes(crack->normal)) {
     for (double edge : crack->region[t]) add_line(t, edge);
   }
+  if (box.grading.layers == 0) return lines;
+  // Grading towards the front: the crack plane along the normal (only if part of the crack's edge
+  // is a front), and each front edge (an edge inside the body) along its in-plane axis.
+  const int normal = crack->normal;
+  const std::array<std::vector<double>, 3> base = lines;
+  std::vector<std::pair<int, double>> fronts;
+  for (int t : in_plane_axes(normal)) {
+    const double low = box.origin[t], high = low + box.size[t];
+    for (double edge : crack->region[t]) {
+      if (edge > low + tolerance(box, t) && edge < high - tolerance(box, t)) fronts.push_back({t, edge});
+    }
+  }
+  if (fronts.empty()) return lines;
+  fronts.push_back({normal, crack->at});
+  const Grading grading = resolve_grading(box, *crack);
+  for (const auto& [axis, position] : fronts)
+    add_graded_lines(base[axis], lines[axis], position, grading, tolerance(box, axis));
   return lines;
 }
 

@@ -18,6 +18,24 @@ struct CrackSpec {
   double gap = 0.0;     ///< initial normal gap g0 [m] (MODEL.md eq. 9)
 };
 
+/// Geometric grading of the grid lines towards a crack front: on each side of the front, lines at
+/// distance h ratio^k (k = 1..layers) from it, h the distance to the next grid line on that side.
+/// The cells next to the front then shrink geometrically (hp-refinement of the crack-tip
+/// singularity, which otherwise limits every order p to first-order convergence).
+struct Grading {
+  int layers = 0;       ///< 0: no grading; kAutoLayers: auto_layers()
+  double ratio = 0.2;   ///< in (0, 1)
+};
+inline constexpr int kAutoLayers = -1;
+inline constexpr int kMaxAutoLayers = 4;
+
+/// The number of layers `mesh.box.grading: auto` gives an order-p mesh whose cells next to the front
+/// are h (the largest uniform cell size of the axes graded) in a body whose thinnest side is D:
+/// p - 1 + round(log2(D / h)), at least 1 and at most kMaxAutoLayers. One more layer per halving of
+/// h keeps the front's share of the error shrinking faster than h; p - 1 at h = D and ratio 0.2
+/// are the measurements of docs/benchmarks.md section 2 (2 layers suffice at p = 3, 3 at p = 4).
+int auto_layers(int order, double cell_size, double thinnest_side);
+
 /// A box [origin, origin + size] meshed with cells[0] x cells[1] x cells[2] elements of order p.
 struct BoxSpec {
   Vec3 origin = Vec3::Zero();
@@ -27,10 +45,17 @@ struct BoxSpec {
   /// Grid lines added to the uniform ones along each axis [m] (those on or outside the boundary,
   /// and repeats, are ignored).
   std::array<std::vector<double>, 3> extra_lines;
+  /// Grading towards the crack front (the lines of grid_lines() and build_box_mesh(box, crack)).
+  Grading grading;
 };
 
-/// Grid-line positions along each axis: the uniform lines of `box`, its extra lines, and the lines
-/// that crack edges need (a crack edge strictly inside a cell splits that cell).
+/// box.grading with automatic layers resolved for this crack (auto_layers).
+Grading resolve_grading(const BoxSpec& box, const CrackSpec& crack);
+
+/// Grid-line positions along each axis: the uniform lines of `box`, its extra lines, the lines
+/// that crack edges need (a crack edge strictly inside a cell splits that cell), then box.grading's
+/// layers towards every crack front (the crack plane along the normal, and each front edge along the
+/// in-plane axis across it).
 std::array<std::vector<double>, 3> grid_lines(const BoxSpec& box, const std::optional<CrackSpec>& crack);
 
 /// What is wrong with a crack in a box, or an empty string if nothing is. The first word of the
@@ -44,6 +69,13 @@ Mesh build_box_mesh(const BoxSpec& box, const std::array<std::vector<double>, 3>
 
 /// Convenience: grid_lines() then build_box_mesh().
 Mesh build_box_mesh(const BoxSpec& box, const std::optional<CrackSpec>& crack = std::nullopt);
+
+/// Largest aspect ratio (longest over shortest edge) of the cells of a set of grid lines.
+double max_aspect_ratio(const std::array<std::vector<double>, 3>& lines);
+
+/// Largest aspect ratio of the elements of any mesh: longest over shortest extent of each element's
+/// bounding box (exact for axis-aligned bricks, a rough measure for other shapes).
+double max_aspect_ratio(const Mesh& mesh);
 
 /// Names of the six box faces, in local-face order: "x-", "x+", "y-", "y+", "z-", "z+".
 const std::array<std::string, 6>& box_face_names();

@@ -1,11 +1,13 @@
 #include <iomanip>
 #include <ostream>
+#include <sstream>
 
 #include "pipeline/commands.hpp"
 #include "core/resources.hpp"
 #include "fem/assembly.hpp"
 #include "fem/constraints.hpp"
 #include "pipeline/limits.hpp"
+#include "mesh/box.hpp"
 #include "pipeline/model.hpp"
 #include "scene/scene.hpp"
 
@@ -15,7 +17,7 @@ void run_check(const CheckOptions& options, std::ostream& out) {
   Stopwatch clock;
   const scene::Scene scene = scene::load_scene(options.scene_path, parse_overrides(options.overrides));
   check_memory(scene, options.assemble);
-  const Model model = build_model(scene);
+  const Model model = build_model(scene, MeshUse::modal);
   const double mesh_seconds = clock.seconds();
   const mesh::Mesh& mesh = model.mesh;
 
@@ -33,6 +35,27 @@ void run_check(const CheckOptions& options, std::ostream& out) {
   } else {
     out << "mesh         " << scene.gmsh_file << ": " << mesh::shape_name(mesh.shape) << " elements of order " << mesh.order
         << "\n";
+  }
+  if (scene.gmsh_file.empty()) {
+    // The modal mesh is what check builds; crackle run meshes without grading under mode auto.
+    const mesh::Grading modal_grading = box_grading(scene, MeshUse::modal);
+    const mesh::Grading run_grading = box_grading(scene, MeshUse::transient);
+    auto grading_text = [&](mesh::Grading grading) {
+      if (grading.layers == 0 || !scene.crack) return std::string("none");
+      mesh::BoxSpec box = scene.box;
+      box.grading = grading;
+      grading = mesh::resolve_grading(box, *scene.crack);
+      std::ostringstream text;
+      text << grading.layers << " layers of ratio " << grading.ratio;
+      return text.str();
+    };
+    out << "grading      " << grading_text(modal_grading) << " (crackle modal, check), " << grading_text(run_grading)
+        << " (crackle run)\n";
+    out << "aspect ratio " << std::setprecision(4) << mesh::max_aspect_ratio(box_lines(scene, MeshUse::modal))
+        << " max (crackle modal, check), " << mesh::max_aspect_ratio(box_lines(scene, MeshUse::transient))
+        << " max (crackle run)\n";
+  } else {
+    out << "aspect ratio " << std::setprecision(4) << mesh::max_aspect_ratio(mesh) << " max\n";
   }
   out << "elements     " << mesh.n_elements() << "\n";
   out << "nodes        " << mesh.n_nodes() << " (" << mesh.n_original_nodes << " + "

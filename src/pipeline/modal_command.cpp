@@ -34,7 +34,7 @@ void run_modal_command(const ModalCommandOptions& options, std::ostream& out) {
   std::optional<OutputFolder> folder;
   if (writer) folder.emplace(options.output_directory, "modal", options.scene_path, options.overwrite, std::cerr);
   try {
-    const Model model = build_model(scene);
+    const Model model = build_model(scene, MeshUse::modal);
     modal::ModalOptions modal_settings = modal_options(section);
     modal_settings.cache_directory = options.modal_cache;
     const modal::ModalResult result = modal::run_modal(

@@ -17,10 +17,20 @@ namespace {
 /// Relative tolerance of region ranges (and of the grid lines they add) against the body size.
 constexpr double kRegionTolerance = 1e-9;
 
+}  // namespace
+
+mesh::Grading box_grading(const scene::Scene& scene, MeshUse use) {
+  const std::string& mode = scene.grading.mode;
+  if (mode == "none" || (mode == "auto" && use == MeshUse::transient)) return {0, 0.2};
+  return scene.grading.grading;
+}
+
 /// Box grid lines: the generator's, plus the ends of the material regions inside the body, so that
 /// every layer is a whole number of elements.
-std::array<std::vector<double>, 3> box_lines(const scene::Scene& scene) {
-  std::array<std::vector<double>, 3> lines = mesh::grid_lines(scene.box, scene.crack);
+std::array<std::vector<double>, 3> box_lines(const scene::Scene& scene, MeshUse use) {
+  mesh::BoxSpec box = scene.box;
+  box.grading = box_grading(scene, use);
+  std::array<std::vector<double>, 3> lines = mesh::grid_lines(box, scene.crack);
   for (int axis = 0; axis < 3; ++axis) {
     const double low = scene.box.origin[axis], high = low + scene.box.size[axis];
     const double tolerance = kRegionTolerance * scene.box.size[axis];
@@ -38,6 +48,8 @@ std::array<std::vector<double>, 3> box_lines(const scene::Scene& scene) {
   }
   return lines;
 }
+
+namespace {
 
 std::string where(const scene::Scene& scene, int line) {
   return scene.file + (line > 0 ? ":" + std::to_string(line) : "") + ": ";
@@ -148,7 +160,7 @@ contact::ContactOptions scene_contact_options(const scene::Scene& scene) {
   return contact;
 }
 
-Model build_model(const scene::Scene& scene) {
+Model build_model(const scene::Scene& scene, MeshUse use) {
   check_memory(scene, false);
   Model model;
   if (!scene.gmsh_file.empty()) {
@@ -159,10 +171,8 @@ Model build_model(const scene::Scene& scene) {
     } catch (const InputError& error) {
       throw InputError(where(scene, 0) + "mesh.gmsh: " + error.what());
     }
-  } else if (scene.materials.empty()) {
-    model.mesh = mesh::build_box_mesh(scene.box, scene.crack);
   } else {
-    model.mesh = mesh::build_box_mesh(scene.box, box_lines(scene), scene.crack);
+    model.mesh = mesh::build_box_mesh(scene.box, box_lines(scene, use), scene.crack);
   }
   if (model.mesh.n_elements() == 0) {
     throw InputError(scene.file + ": mesh: a body left with no elements");

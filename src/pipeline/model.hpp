@@ -2,6 +2,7 @@
 /// \file The wiring from a validated scene to the objects the solvers take: the mesh, its
 /// materials, the Dirichlet conditions and the linear system of each variant (fem::System),
 /// shared by every stage of a run.
+#include <array>
 #include <map>
 #include <memory>
 #include <vector>
@@ -44,8 +45,19 @@ struct Model {
 /// The crack contact of the scene's `crack.contact` (and the crack's gap g0).
 contact::ContactOptions scene_contact_options(const scene::Scene& scene);
 
+/// What a model is built for: `mesh.box.grading: auto` grades the box mesh towards the crack front
+/// for modal analysis and leaves it uniform for the full explicit transient (`crackle run`, whose
+/// stable step the smallest graded cell would set).
+enum class MeshUse { modal, transient };
+
+/// The grading of the box mesh for this use (layers = 0: none).
+mesh::Grading box_grading(const scene::Scene& scene, MeshUse use);
+
 /// Meshes the body, makes its materials and turns `boundary:` into Dirichlet conditions.
 /// Throws InputError (naming the scene file) for problems only visible once meshed.
-Model build_model(const scene::Scene& scene);
+Model build_model(const scene::Scene& scene, MeshUse use = MeshUse::transient);
+
+/// The grid lines of a box scene for this use (grading, crack edges, material regions).
+std::array<std::vector<double>, 3> box_lines(const scene::Scene& scene, MeshUse use);
 
 }  // namespace crackle::pipeline

@@ -192,9 +192,17 @@ struct SweepSection {
   int max_periods = 2000;          ///< stepped_sine: periods per frequency at most
 };
 
+/// `mesh.box.grading`: where (mode) and how (layers, ratio; auto resolved from the order) the box
+/// mesh is graded towards the crack front. Which commands grade is decided in pipeline::build_model.
+struct GradingSection {
+  std::string mode = "auto";  ///< auto (modal and check graded, run uniform), always, none
+  mesh::Grading grading;
+};
+
 struct Scene {
   std::string file;  ///< path the scene was read from (or a name for in-memory scenes)
-  mesh::BoxSpec box;
+  mesh::BoxSpec box;  ///< box.grading stays none: build_model sets it per command from `grading`
+  GradingSection grading;
   /// `mesh.gmsh` resolved against the scene file's folder; empty for a box mesh.
   std::string gmsh_file;
   MaterialSection material;

@@ -288,7 +288,7 @@ TEST(Scene, DidYouMean) {
       error_of(box() + material("E: 2e11, Nu: 0.3, rho: 7850")),
       "beam.yaml:6: material.Nu: expected one of E, nu, rho, got unknown key 'Nu' (did you mean 'nu'?)");
   EXPECT_EQ(error_of("mesh:\n  box: {size: [1, 1, 1], cels: [1, 1, 1], order: 1}\n" + material()),
-            "beam.yaml:2: mesh.box.cels: expected one of origin, size, cells, order, lines, got unknown key 'cels' "
+            "beam.yaml:2: mesh.box.cels: expected one of origin, size, cells, order, lines, grading, got unknown key 'cels' "
             "(did you mean 'cells'?)");
 }
 
