@@ -504,6 +504,45 @@ nlohmann::json modal_comparison(const modal::ModalResult& modes, const Transient
   return comparison;
 }
 
+/// After a pulse: the FRF estimate H = X/F of one probe over the band the pulse excites, written as
+/// frf_<probe>.csv; its peaks go into the probe's spectrum.json entry.
+spectral::FrequencyResponse write_frf(const fs::path& directory, const std::string& name, const std::vector<double>& values,
+                                      const transient::ProbeHistory& history, const spectral::Sampling& sampling,
+                                      const scene::ExcitationSection& excitation,
+                                      nlohmann::json& probe_json, std::ostream& out) {
+  std::vector<double> force(history.time.size());
+  for (std::size_t i = 0; i < force.size(); ++i) {
+    force[i] = spectral::half_sine_pulse(history.time[i], 0.0, excitation.duration, excitation.amplitude);
+  }
+  const double nyquist = 0.5 / sampling.time_step;
+  spectral::FrequencyResponse frf =
+      spectral::estimate_frf(values, force, sampling, 0.0, std::min(1.0 / excitation.duration, nyquist));
+  io::CsvTable table;
+  table.add("frequency [Hz]", frf.frequency_hz);
+  table.add("|H| [m/N]", frf.magnitude);
+  table.add("arg H [rad]", frf.phase_rad);
+  std::vector<double> real, imaginary;
+  for (const std::complex<double>& value : frf.response) {
+    real.push_back(value.real());
+    imaginary.push_back(value.imag());
+  }
+  table.add("Re H [m/N]", real);
+  table.add("Im H [m/N]", imaginary);
+  io::write_csv(directory / ("frf_" + name + ".csv"), table);
+  const std::vector<double> peaks = spectral::frf_peaks(frf);
+  probe_json["frf"] = {{"file", "frf_" + name + ".csv"},
+                       {"unit", "m/N"},
+                       {"force_direction", axis_name(excitation.direction)},
+                       {"resolution_hz", frf.resolution_hz},
+                       {"f_max_hz", frf.frequency_hz.empty() ? 0.0 : frf.frequency_hz.back()},
+                       {"peaks_hz", peaks}};
+  out << "frf " << name << ": " << frf.frequency_hz.size() << " bins of " << std::setprecision(4)
+      << frf.resolution_hz << " Hz, peaks at";
+  for (double peak : peaks) out << " " << std::setprecision(6) << peak;
+  out << " Hz\n";
+  return frf;
+}
+
 /// Stage 3 without a harmonic excitation (free vibration, a pulse, or none): per probe a ring-down
 /// analysis (spectral::analyse_ringdown) compared with the modal frequencies when they are at hand,
 /// the envelope of its orders plotted; after a pulse also the FRF estimate H = X/F (CSV and plot).
@@ -554,37 +593,7 @@ void write_ringdown_spectrum(const scene::Scene& scene, const fs::path& director
     }
     out << "\n";
     std::optional<spectral::FrequencyResponse> frf;
-    if (pulse) {
-      std::vector<double> force(history.time.size());
-      for (std::size_t i = 0; i < force.size(); ++i) {
-        force[i] = spectral::half_sine_pulse(history.time[i], 0.0, excitation->duration, excitation->amplitude);
-      }
-      const double nyquist = 0.5 / sampling.time_step;
-      frf = spectral::estimate_frf(values, force, sampling, 0.0, std::min(1.0 / excitation->duration, nyquist));
-      io::CsvTable table;
-      table.add("frequency [Hz]", frf->frequency_hz);
-      table.add("|H| [m/N]", frf->magnitude);
-      table.add("arg H [rad]", frf->phase_rad);
-      std::vector<double> real, imaginary;
-      for (const std::complex<double>& value : frf->response) {
-        real.push_back(value.real());
-        imaginary.push_back(value.imag());
-      }
-      table.add("Re H [m/N]", real);
-      table.add("Im H [m/N]", imaginary);
-      io::write_csv(directory / ("frf_" + probe.name + ".csv"), table);
-      const std::vector<double> peaks = spectral::frf_peaks(*frf);
-      probe_json["frf"] = {{"file", "frf_" + probe.name + ".csv"},
-                           {"unit", "m/N"},
-                           {"force_direction", axis_name(excitation->direction)},
-                           {"resolution_hz", frf->resolution_hz},
-                           {"f_max_hz", frf->frequency_hz.empty() ? 0.0 : frf->frequency_hz.back()},
-                           {"peaks_hz", peaks}};
-      out << "frf " << probe.name << ": " << frf->frequency_hz.size() << " bins of " << std::setprecision(4)
-          << frf->resolution_hz << " Hz, peaks at";
-      for (double peak : peaks) out << " " << std::setprecision(6) << peak;
-      out << " Hz\n";
-    }
+    if (pulse) frf = write_frf(directory, probe.name, values, history, sampling, *excitation, probe_json, out);
     if (spectrum.plots) {
       plot.title = probe.name + " u_" + axis;
       const auto history_plot = spectral::plot_time_history(directory / ("history_" + probe.name + ".png"), values, sampling, plot);
