@@ -8,6 +8,8 @@
 #include <limits>
 #include <optional>
 
+#include <Eigen/Core>
+
 #include "core/errors.hpp"
 #include "core/resources.hpp"
 #include "reduced/integrator.hpp"
@@ -73,6 +75,20 @@ void add_branch_warnings(const SweepSettings& settings, const sweep::HarmonicBal
                               format_number(settings.to_hz) + " Hz (the corrector failed down to the smallest step)");
   }
 }
+
+/// Eigen's products on one thread while it lives. The sweep's dense products are small (hundreds of
+/// rows); Eigen's OpenMP threads spin-wait between them, which on a shared machine (load 9 on 2 cores)
+/// made the beam sweep 14x slower (43 s against 3 s for 52 points, docs/benchmarks.md section 7).
+class SingleThreadedEigen {
+ public:
+  SingleThreadedEigen() : threads_(Eigen::nbThreads()) { Eigen::setNbThreads(1); }
+  ~SingleThreadedEigen() { Eigen::setNbThreads(threads_); }
+  SingleThreadedEigen(const SingleThreadedEigen&) = delete;
+  SingleThreadedEigen& operator=(const SingleThreadedEigen&) = delete;
+
+ private:
+  int threads_;
+};
 
 /// Harmonics of one base period of samples y_j at t_j = j T / n, rows x (H+1): Y_0 the mean,
 /// Y_k = (2/n) sum_j y_j e^{-2 pi i k j / n}, so that y = Re sum_k Y_k e^{ik tau}.
@@ -186,6 +202,7 @@ std::vector<SweepProbe> sweep_probes(const scene::Scene& scene) {
 
 SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const SweepSettings& settings,
                                    const SweepProgress& progress) {
+  const SingleThreadedEigen one_thread;
   Stopwatch clock;
   const scene::SweepSection& section = settings.section;
   sweep::HarmonicBalanceOptions options;
@@ -233,6 +250,7 @@ SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const S
 
 SweepResult stepped_sine_sweep(const reduced::ReducedSystem& system, const SweepSettings& settings,
                                const SweepProgress& progress) {
+  const SingleThreadedEigen one_thread;
   Stopwatch clock;
   const int count = settings.section.points;
   VectorX q = VectorX::Zero(system.n_modes()), v = VectorX::Zero(system.n_modes());
