@@ -1,9 +1,22 @@
 #include "core/resources.hpp"
 
+#include <cstdio>
 #include <fstream>
 #include <string>
 
 namespace crackle {
+
+std::string duration_text(double seconds) {
+  char buffer[32];
+  if (seconds < 120.0) {
+    std::snprintf(buffer, sizeof buffer, "%.1f s", seconds);
+  } else if (seconds < 7200.0) {
+    std::snprintf(buffer, sizeof buffer, "%.1f min", seconds / 60.0);
+  } else {
+    std::snprintf(buffer, sizeof buffer, "%.1f h", seconds / 3600.0);
+  }
+  return buffer;
+}
 namespace {
 
 long long status_field_kb(const char* field) {

@@ -1,6 +1,7 @@
 #pragma once
 /// \file Wall-clock timer and memory figures for reports and benchmarks.
 #include <chrono>
+#include <string>
 
 namespace crackle {
 
@@ -17,6 +18,9 @@ class Stopwatch {
  private:
   std::chrono::steady_clock::time_point start_;
 };
+
+/// A duration for progress lines: "12.3 s" below 2 min, "4.5 min" below 2 h, else "3.1 h".
+std::string duration_text(double seconds);
 
 /// Peak resident set size of this process so far, in bytes (0 where unknown).
 long long peak_rss_bytes();

@@ -395,17 +395,6 @@ class SpectrumMonitor {
   void write(const scene::Scene& scene, const std::filesystem::path& directory, double dt, std::ostream& out);
 
  private:
-  static std::string duration_text(double seconds) {
-    char buffer[32];
-    if (seconds < 120.0) {
-      std::snprintf(buffer, sizeof buffer, "%.0f s", seconds);
-    } else if (seconds < 7200.0) {
-      std::snprintf(buffer, sizeof buffer, "%.1f min", seconds / 60.0);
-    } else {
-      std::snprintf(buffer, sizeof buffer, "%.1f h", seconds / 3600.0);
-    }
-    return buffer;
-  }
   double dt_ = 0.0;
   Stopwatch clock_;             ///< since the monitor was made (the run's start)
   double check_seconds_ = 0.0;  ///< clock_ at the last steady-state check

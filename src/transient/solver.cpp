@@ -16,18 +16,6 @@
 namespace crackle::transient {
 namespace {
 
-std::string seconds_text(double seconds) {
-  char buffer[32];
-  if (seconds < 120.0) {
-    std::snprintf(buffer, sizeof buffer, "%.1f s", seconds);
-  } else if (seconds < 7200.0) {
-    std::snprintf(buffer, sizeof buffer, "%.1f min", seconds / 60.0);
-  } else {
-    std::snprintf(buffer, sizeof buffer, "%.1f h", seconds / 3600.0);
-  }
-  return buffer;
-}
-
 /// K plus the springs of the terms that bound the stable step (every contact spring closed).
 class StableStepOperator final : public fem::LinearOperator {
  public:
@@ -275,7 +263,7 @@ void TransientSolver::Impl::progress_line(Index i, double elapsed, const std::st
   const double done = static_cast<double>(i + 1) / static_cast<double>(steps);
   std::fprintf(stderr, "transient: step %lld/%lld (%.1f%%), t = %.4g s, elapsed %s, ETA %s to the end time%s%s\n",
                static_cast<long long>(i + 1), static_cast<long long>(steps), 100.0 * done, summary.time,
-               seconds_text(elapsed).c_str(), seconds_text(elapsed * (1.0 - done) / done).c_str(),
+               duration_text(elapsed).c_str(), duration_text(elapsed * (1.0 - done) / done).c_str(),
                note.empty() ? "" : "; ", note.c_str());
 }
 
