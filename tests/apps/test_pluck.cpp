@@ -28,12 +28,7 @@ namespace {
 
 /// A steel cantilever 0.2 x 0.02 x 0.01 m of p = 1 clamped at x = 0, with a half-depth edge crack
 /// from the top face at x = 0.04 (overridden away where a test needs no crack).
-const char* kBeam = R"(mesh:
-  box: {size: [0.2, 0.02, 0.01], cells: [10, 1, 2], order: 1}
-material: {E: 210.0e9, nu: 0.3, rho: 7850.0}
-boundary:
-  - {face: x-, fix: [x, y, z]}
-)";
+const std::string kBeam = cli_testing::cantilever("[10, 1, 2]", false);
 
 const char* kCrack = R"(crack:
   plane: {normal: x, at: 0.04}

@@ -3,6 +3,8 @@
 // breathing beam, undamped chattering, and the cached reduction shared by a study.
 #include <gtest/gtest.h>
 
+#include "cli_testing.hpp"
+
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -19,15 +21,7 @@ namespace fs = std::filesystem;
 namespace {
 
 /// A 10 x 2 x 1 cantilever of p = 1 (the test_run.cpp beam) with a half-depth edge crack at x = 0.04.
-const char* kBody = R"(mesh:
-  box: {size: [0.2, 0.02, 0.01], cells: [10, 2, 1], order: 1}
-material: {E: 210.0e9, nu: 0.3, rho: 7850.0}
-boundary:
-  - {face: x-, fix: [x, y, z]}
-crack:
-  plane: {normal: x, at: 0.04}
-  region: {y: [0.0, 0.02], z: [0.005, 0.01]}
-)";
+const std::string kBody = cli_testing::cantilever("[10, 2, 1]");
 
 /// Harmonic point load at the tip, 5 % damping, 40 periods, spectrum over the last 10.
 const char* kForced = R"(transient:

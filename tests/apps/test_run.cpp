@@ -17,15 +17,7 @@ namespace {
 
 /// A 10 x 1 x 1 cantilever of p = 1 with a half-depth edge crack, driven at half its first
 /// bilinear frequency; mass-proportional damping of 5 % at mode 1.
-const char* kScene = R"(mesh:
-  box: {size: [0.2, 0.02, 0.01], cells: [10, 1, 1], order: 1}
-material: {E: 210.0e9, nu: 0.3, rho: 7850.0}
-boundary:
-  - {face: x-, fix: [x, y, z]}
-crack:
-  plane: {normal: x, at: 0.04}
-  region: {y: [0.0, 0.02], z: [0.005, 0.01]}
-modal: {modes: 2}
+const std::string kScene = cli_testing::cantilever("[10, 1, 1]") + R"(modal: {modes: 2}
 transient:
   excitation: {face: x+, direction: z, amplitude: 20.0, frequency: {mode: 1, ratio: 0.5}}
   damping: {ratio: 0.05, at: {mode: 1}}

@@ -5,6 +5,8 @@
 // late messages name the key and the line.
 #include <gtest/gtest.h>
 
+#include "cli_testing.hpp"
+
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -19,15 +21,7 @@ namespace fs = std::filesystem;
 namespace {
 
 /// A 10 x 1 x 1 cantilever of p = 1 with a half-depth edge crack, driven at 100 Hz for 4 periods.
-const char* kScene = R"(mesh:
-  box: {size: [0.2, 0.02, 0.01], cells: [10, 1, 1], order: 1}
-material: {E: 210.0e9, nu: 0.3, rho: 7850.0}
-boundary:
-  - {face: x-, fix: [x, y, z]}
-crack:
-  plane: {normal: x, at: 0.04}
-  region: {y: [0.0, 0.02], z: [0.005, 0.01]}
-transient:
+const std::string kScene = cli_testing::cantilever("[10, 1, 1]") + R"(transient:
   excitation: {face: x+, direction: z, amplitude: 20.0, frequency: 100}
   periods: 4
   progress: false

@@ -3,6 +3,8 @@
 // sweep.csv and sweep.json, and file:line errors for bad sweep keys.
 #include <gtest/gtest.h>
 
+#include "cli_testing.hpp"
+
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -18,15 +20,7 @@ namespace {
 
 /// The 10 x 1 x 1 cantilever of test_run.cpp (p = 1, half-depth edge crack, 5 % damping at mode 1),
 /// swept through half its first bilinear frequency.
-const char* kScene = R"(mesh:
-  box: {size: [0.2, 0.02, 0.01], cells: [10, 1, 1], order: 1}
-material: {E: 210.0e9, nu: 0.3, rho: 7850.0}
-boundary:
-  - {face: x-, fix: [x, y, z]}
-crack:
-  plane: {normal: x, at: 0.04}
-  region: {y: [0.0, 0.02], z: [0.005, 0.01]}
-transient:
+const std::string kScene = cli_testing::cantilever("[10, 1, 1]") + R"(transient:
   excitation: {face: x+, direction: z, amplitude: 20.0, frequency: {mode: 1, ratio: 0.5}}
   damping: {ratio: 0.05, at: {mode: 1}}
   periods: 60
