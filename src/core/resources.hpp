@@ -1,5 +1,5 @@
 #pragma once
-/// \file Wall-clock timer and memory figures for reports and benchmarks.
+/// \file Wall-clock timer and memory figures for reports, benchmarks and the memory checks.
 #include <chrono>
 #include <string>
 
@@ -27,5 +27,13 @@ long long peak_rss_bytes();
 
 /// Current resident set size of this process, in bytes (0 where unknown).
 long long current_rss_bytes();
+
+/// Memory this process may still take [bytes]: MemAvailable of /proc/meminfo (sysconf where that
+/// is missing), lowered to the address-space limit (RLIMIT_AS) and the cgroup's memory.max when set.
+/// `source` says which figure it is, for messages.
+double available_memory_bytes(std::string* source = nullptr);
+
+/// "1.5 GiB", "300 MiB", "2.4e7 TiB".
+std::string bytes_text(double bytes);
 
 }  // namespace crackle

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/errors.hpp"
+#include "core/resources.hpp"
 
 namespace crackle::modal {
 
@@ -71,8 +72,13 @@ std::vector<Index> CholmodFactor::compressed_ordering(const SparseMatrix& matrix
 CholmodFactor::CholmodFactor(const SparseMatrix& stiffness, const SparseMatrix& mass, double shift,
                              std::string context)
     : context_(std::move(context)), rows_(stiffness.rows()) {
-  SparseMatrix matrix = stiffness - shift * mass;
-  matrix.makeCompressed();
+  // Without a shift K itself is factorised (no copy: a static solve holds one matrix less).
+  SparseMatrix shifted;
+  if (shift != 0.0 || !stiffness.isCompressed()) {
+    shifted = stiffness - shift * mass;
+    shifted.makeCompressed();
+  }
+  const SparseMatrix& matrix = shift != 0.0 || !stiffness.isCompressed() ? shifted : stiffness;
   cholmod_start(&common_);
   common_.print = 0;
   common_.error_handler = nullptr;
@@ -94,6 +100,7 @@ CholmodFactor::CholmodFactor(const SparseMatrix& stiffness, const SparseMatrix& 
   common_.method[0].ordering = CHOLMOD_GIVEN;
   factor_ = cholmod_analyze_p(&view, permutation.data(), nullptr, 0, &common_);
   if (!factor_ || common_.status < CHOLMOD_OK) fail("cholmod_analyze");
+  check_factor_fits();
   if (!cholmod_factorize(&view, factor_, &common_) || common_.status != CHOLMOD_OK) {
     if (common_.status == CHOLMOD_NOT_POSDEF) {
       throw SolverError(context_ + ": CHOLMOD found K - sigma M not positive definite (pivot at column " +
@@ -101,6 +108,21 @@ CholmodFactor::CholmodFactor(const SparseMatrix& stiffness, const SparseMatrix& 
     }
     fail("cholmod_factorize");
   }
+}
+
+void CholmodFactor::check_factor_fits() const {
+  // The symbolic analysis knows the factor's size: its values (xsize for a supernodal factor, else
+  // one per nonzero of L) and, for a simplicial one, a row index each. Refuse here, in a second, a
+  // factorisation the kernel would kill the process for after minutes.
+  const double entries = factor_->is_super ? static_cast<double>(factor_->xsize) : common_.lnz;
+  const double needed = 8.0 * entries + (factor_->is_super ? 0.0 : 4.0 * common_.lnz);
+  std::string source;
+  const double available = available_memory_bytes(&source);
+  if (needed <= available) return;
+  throw SolverError(context_ + ": the Cholesky factor of " + std::to_string(rows_) + " DOFs needs about " +
+                    bytes_text(needed) + " (" + format_number(common_.lnz) + " nonzeros), more than the " +
+                    bytes_text(available) + " available (" + source +
+                    "); use fewer cells or a lower mesh.box.order, or run crackle modal under mpirun (MUMPS)");
 }
 
 CholmodFactor::~CholmodFactor() {

@@ -13,9 +13,10 @@ namespace crackle::modal {
 
 class CholmodFactor {
  public:
-  /// Forms K - sigma M (full symmetric CSR, same size), analyses it (fill-reducing ordering of the
+  /// Forms K - sigma M (full symmetric CSR, same size; K itself when sigma = 0), analyses it (fill-reducing ordering of the
   /// compressed graph, see compressed_ordering) and factorises it. `context` prefixes every error
-  /// message (e.g. "ARPACK eigen-solve"). SolverError if K - sigma M is not positive definite.
+  /// message (e.g. "ARPACK eigen-solve"). SolverError if K - sigma M is not positive definite, or
+  /// if the analysed factor would not fit in the memory available (before factorising).
   CholmodFactor(const SparseMatrix& stiffness, const SparseMatrix& mass, double shift, std::string context);
   ~CholmodFactor();
   CholmodFactor(const CholmodFactor&) = delete;
@@ -26,6 +27,8 @@ class CholmodFactor {
 
  private:
   std::vector<Index> compressed_ordering(const SparseMatrix& matrix);
+  /// SolverError when the analysed factor would not fit in the memory available.
+  void check_factor_fits() const;
   [[noreturn]] void fail(const char* what);
 
   std::string context_;

@@ -16,7 +16,7 @@ namespace crackle::pipeline {
 void run_check(const CheckOptions& options, std::ostream& out) {
   Stopwatch clock;
   const scene::Scene scene = scene::load_scene(options.scene_path, parse_overrides(options.overrides));
-  check_memory(scene, options.assemble);
+  check_memory(scene, options.assemble ? matrices::stiffness : matrices::none);
   const Model model = build_model(scene, MeshUse::modal);
   const double mesh_seconds = clock.seconds();
   const mesh::Mesh& mesh = model.mesh;

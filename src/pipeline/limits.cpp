@@ -9,32 +9,11 @@
 #include <string>
 
 #include "core/errors.hpp"
+#include "core/resources.hpp"
 #include "io/files.hpp"
 
 namespace crackle::pipeline {
 namespace {
-
-/// The first number of a line starting with `key` in a /proc-style file [kB for meminfo], or -1.
-double field_of(const char* file, const std::string& key) {
-  std::ifstream in(file);
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.compare(0, key.size(), key) == 0) return std::strtod(line.c_str() + key.size(), nullptr);
-  }
-  return -1.0;
-}
-
-/// A cgroup v2 limit less what the group uses, or -1 without a limit.
-double cgroup_room() {
-  std::ifstream max_file("/sys/fs/cgroup/memory.max");
-  std::string max_text;
-  if (!(max_file >> max_text) || max_text == "max") return -1.0;
-  const double limit = std::strtod(max_text.c_str(), nullptr);
-  std::ifstream current_file("/sys/fs/cgroup/memory.current");
-  double current = 0.0;
-  current_file >> current;
-  return std::max(0.0, limit - current);
-}
 
 std::string number_text(double value) {
   if (value < 1e6) return format_number(std::round(value));
@@ -44,40 +23,6 @@ std::string number_text(double value) {
 }
 
 }  // namespace
-
-std::string bytes_text(double bytes) {
-  const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB"};
-  int unit = 0;
-  while (unit < 4 && bytes >= 1024.0) {
-    bytes /= 1024.0;
-    ++unit;
-  }
-  char buffer[48];
-  std::snprintf(buffer, sizeof buffer, bytes < 1e4 ? "%.3g %s" : "%.2g %s", bytes, units[unit]);
-  return buffer;
-}
-
-double available_memory_bytes(std::string* source) {
-  double bytes = field_of("/proc/meminfo", "MemAvailable:") * 1024.0;
-  std::string from = "MemAvailable in /proc/meminfo";
-  if (bytes < 0.0) {
-    bytes = static_cast<double>(::sysconf(_SC_AVPHYS_PAGES)) * static_cast<double>(::sysconf(_SC_PAGESIZE));
-    from = "available physical pages (sysconf)";
-  }
-  struct rlimit limit {};
-  if (::getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY &&
-      static_cast<double>(limit.rlim_cur) < bytes) {
-    bytes = static_cast<double>(limit.rlim_cur);
-    from = "the address-space limit (ulimit -v)";
-  }
-  const double cgroup = cgroup_room();
-  if (cgroup >= 0.0 && cgroup < bytes) {
-    bytes = cgroup;
-    from = "the cgroup's memory.max";
-  }
-  if (source) *source = from;
-  return bytes;
-}
 
 MeshEstimate estimate_mesh(const scene::Scene& scene) {
   MeshEstimate estimate;
@@ -102,23 +47,22 @@ MeshEstimate estimate_mesh(const scene::Scene& scene) {
   return estimate;
 }
 
-double estimate_memory_bytes(const scene::Scene& scene, const MeshEstimate& mesh, bool stiffness) {
+double estimate_memory_bytes(const scene::Scene& scene, const MeshEstimate& mesh, int matrices) {
   if (!scene.gmsh_file.empty()) return mesh.file_bytes;  // the reader holds about as much as the text
   // Mesh: coordinates (3 doubles) and two DOF maps per node, connectivity (int32) and a region per element.
   double bytes = mesh.nodes * (24.0 + 24.0) + mesh.elements * (4.0 * mesh.nodes_per_element + 8.0);
   // The lumped mass, its inverse, U, V, the force and the integrator's work vectors: 8 per DOF.
   bytes += 8.0 * 8.0 * mesh.dofs;
-  if (stiffness) {
-    // K in CSR: a node couples to about (p + 2)^3 nodes on average in a hexahedral mesh, 9 entries each.
-    const double p = scene.box.order;
-    bytes += 12.0 * mesh.dofs * 3.0 * std::pow(p + 2.0, 3.0);
-  }
+  // A matrix of K's pattern in CSR: a node couples to (p + 2)^3 nodes on average in a hexahedral
+  // mesh (exactly, over the lattice's vertex, edge, face and interior nodes), 9 entries each.
+  const double p = scene.box.order;
+  bytes += matrices * 12.0 * mesh.dofs * 3.0 * std::pow(p + 2.0, 3.0);
   return bytes;
 }
 
-void check_memory(const scene::Scene& scene, bool stiffness) {
+void check_memory(const scene::Scene& scene, int matrices) {
   const MeshEstimate mesh = estimate_mesh(scene);
-  const double needed = estimate_memory_bytes(scene, mesh, stiffness);
+  const double needed = estimate_memory_bytes(scene, mesh, matrices);
   std::string source;
   const double available = available_memory_bytes(&source);
   if (needed <= available) return;
@@ -128,13 +72,15 @@ void check_memory(const scene::Scene& scene, bool stiffness) {
                      source + ")");
   }
   const auto& cells = scene.box.cells;
+  const std::string matrix_text = matrices == 1  ? ", K"
+                                  : matrices > 1 ? ", " + std::to_string(matrices) + " sparse matrices of K's size"
+                                                 : "";
   throw InputError(scene.where("mesh.box.cells") + ": expected a mesh that fits in memory, got [" +
                    std::to_string(cells[0]) + ", " + std::to_string(cells[1]) + ", " + std::to_string(cells[2]) +
                    "] cells of order " + std::to_string(scene.box.order) + ": about " + number_text(mesh.nodes) +
                    " nodes, " + number_text(mesh.elements) + " elements, " + number_text(mesh.dofs) +
-                   " DOFs, which need at least " + bytes_text(needed) + " for the mesh" +
-                   (stiffness ? ", K" : "") + " and the vectors, more than the " + bytes_text(available) +
-                   " available (" + source + ")");
+                   " DOFs, which need at least " + bytes_text(needed) + " for the mesh" + matrix_text +
+                   " and the vectors, more than the " + bytes_text(available) + " available (" + source + ")");
 }
 
 void check_run_outputs(const scene::Scene& scene, const MeshEstimate& mesh, double steps, double probe_rows,

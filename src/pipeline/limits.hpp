@@ -6,14 +6,10 @@
 #include <filesystem>
 #include <string>
 
+#include "core/resources.hpp"
 #include "scene/scene.hpp"
 
 namespace crackle::pipeline {
-
-/// Memory this process may still take [bytes]: MemAvailable of /proc/meminfo (sysconf where that
-/// is missing), lowered to the address-space limit (RLIMIT_AS) and the cgroup's memory.max when set.
-/// `source` says which figure it is, for messages.
-double available_memory_bytes(std::string* source = nullptr);
 
 /// Sizes of the mesh a scene describes, computed without meshing (box: cells and order; a Gmsh
 /// mesh: unknown counts, its file size stands for the mesh).
@@ -26,13 +22,22 @@ struct MeshEstimate {
 };
 MeshEstimate estimate_mesh(const scene::Scene& scene);
 
+/// Sparse matrices of K's size [count] a command holds at once besides the mesh and vectors.
+namespace matrices {
+inline constexpr int none = 0;
+inline constexpr int stiffness = 1;  ///< K in CSR: check, a transient on tetrahedra
+inline constexpr int static_solve = 2;  ///< K and CHOLMOD's permuted copy: the reduced model's static images
+inline constexpr int eigen_solve = 4;  ///< K, M, K - sigma M and CHOLMOD's permuted copy: a modal stage
+}  // namespace matrices
+
 /// What a command needs at least [bytes]: the mesh, the DOF maps, the lumped mass and vectors of
-/// the DOFs; with `stiffness` also K in CSR (check, modal; transient runs on tetrahedra).
-double estimate_memory_bytes(const scene::Scene& scene, const MeshEstimate& mesh, bool stiffness);
+/// the DOFs, and `matrices` sparse matrices of K's pattern in CSR (not counting a factor: its size
+/// is known after the symbolic analysis, where modal::CholmodFactor checks it).
+double estimate_memory_bytes(const scene::Scene& scene, const MeshEstimate& mesh, int matrices);
 
 /// Refuses (InputError naming the mesh key, the estimate and the memory available) a scene whose
 /// mesh and operators cannot fit in memory. Call before build_model.
-void check_memory(const scene::Scene& scene, bool stiffness);
+void check_memory(const scene::Scene& scene, int matrices);
 
 /// Refuses a run whose histories (probes at full rate for the spectrum, probes.csv rows, energy
 /// rows) cannot fit in memory, naming the run-length key; and snapshots that cannot fit on the
@@ -40,7 +45,5 @@ void check_memory(const scene::Scene& scene, bool stiffness);
 void check_run_outputs(const scene::Scene& scene, const MeshEstimate& mesh, double steps, double probe_rows,
                        const std::filesystem::path& directory);
 
-/// "1.5 GiB", "300 MiB", "2.4e7 TiB".
-std::string bytes_text(double bytes);
 
 }  // namespace crackle::pipeline

@@ -995,7 +995,10 @@ void run_run_command(const RunCommandOptions& options, std::ostream& out) {
   // Before anything is computed: the folder can be written and is ours (leftovers of an earlier run
   // removed), and the mesh fits in memory.
   std::string modal_reason;
-  check_memory(scene, !needed_variants(scene, modal_reason).empty() || !scene.gmsh_file.empty());
+  check_memory(scene, !needed_variants(scene, modal_reason).empty() ? matrices::eigen_solve
+                     : scene.transient->model == "reduced"       ? matrices::static_solve
+                     : !scene.gmsh_file.empty()                  ? matrices::stiffness
+                                                                 : matrices::none);
   OutputFolder folder(directory, "run", options.scene_path, options.overwrite, std::cerr);
   try {
     run_stages(scene, options, out);
