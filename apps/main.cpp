@@ -350,9 +350,9 @@ int main(int argc, char** argv) {
     // The estimates refuse what surely cannot fit; what they miss (solver workspace, other
     // processes taking the memory meanwhile) ends here, with a line that says what happened.
     std::string source;
-    const double available = pipeline::available_memory_bytes(&source);
+    const double available = available_memory_bytes(&source);
     std::cerr << "crackle: error: out of memory: an allocation failed (std::bad_alloc) with "
-              << pipeline::bytes_text(available) << " available (" << source
+              << bytes_text(available) << " available (" << source
               << "); use a coarser mesh (mesh.box.cells, mesh.box.order), fewer modes or a shorter run\n";
     return kExitOutOfMemory;
   } catch (const std::exception& error) {
