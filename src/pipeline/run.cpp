@@ -833,12 +833,16 @@ transient::ProbeHistory run_reduced_stage(const scene::Scene& scene, const Model
   records.probes.values.assign(9 * section.probes.size(), {});
   const Index n_steps = static_cast<Index>(std::ceil(setup.settings.end_time / dt - 1e-9));
   Stopwatch run_clock;
+  // The per-step products are small: Eigen's OpenMP threads would only spin between them.
+  const int eigen_threads = Eigen::nbThreads();
+  Eigen::setNbThreads(1);
   try {
     march_reduced(integrator, reduced, n_steps, dt, spectrum, records, summary);
   } catch (const SolverError& error) {
     summary.status = "unstable";
     summary.message = error.what();
   }
+  Eigen::setNbThreads(eigen_threads);
   summary.wall_s = run_clock.seconds();
   summary.time = integrator.time();
   summary.steps = integrator.n_steps_taken();
