@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "contact/contact.hpp"
+#include "bench_args.hpp"
 #include "core/resources.hpp"
 #include "fem/material.hpp"
 #include "fem/system.hpp"
@@ -24,13 +25,7 @@
 
 namespace {
 
-std::vector<double> parse_list(const std::string& text) {
-  std::vector<double> values;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) values.push_back(std::stod(item));
-  return values;
-}
+using crackle::bench::parse_list;
 
 constexpr double kPi = 3.14159265358979323846;
 

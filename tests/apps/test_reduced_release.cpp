@@ -19,9 +19,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// The test_pluck.cpp cantilever (p = 1, [10, 1, 2] cells) with its half-depth edge crack at x = 0.04.
-const std::string kBeam = cli_testing::cantilever("[10, 1, 2]");
-
 fs::path scratch() {
   static const fs::path dir = fs::temp_directory_path() / ("crackle-test-reduced-release-" + std::to_string(::getpid()));
   fs::create_directories(dir);
@@ -73,20 +70,6 @@ double first(const std::string& name, const std::string& header) {
 
 const nlohmann::json& ringdown(const nlohmann::json& spectrum) { return spectrum["probes"]["tip"]["ringdown"]; }
 
-/// Released from a static tip load of 50 N (the top crack pressed shut), no damping.
-std::string static_release(const std::string& contact) {
-  return kBeam + "  contact: {model: " + contact + "}\n" + R"(modal: {modes: 2, mass: lumped}
-transient:
-  release:
-    static: {face: x+, direction: z, amplitude: 50.0}
-  duration: 0.15
-  progress: false
-  probes:
-    - {name: tip, point: [0.2, 0.01, 0.01]}
-spectrum: {harmonics: 3, subharmonics: false, ringdown: {window_periods: 2}}
-)";
-}
-
 const char* kReduced = "--set transient.model=reduced --set transient.reduced.max_frequency=5000";
 
 }  // namespace
@@ -98,9 +81,9 @@ const char* kReduced = "--set transient.model=reduced --set transient.reduced.ma
 // modes' static share, which the full model carries as vibration above max_frequency): it shrinks as
 // modes are added. The ring-down is the full model's breathing frequency.
 TEST(ReducedRelease, StaticReleaseStartsAtTheFullStaticDeflectionAndRingsAtTheFullBreathingFrequency) {
-  crackle_run("static-full", static_release("penalty"));
-  crackle_run("static-reduced", static_release("penalty"), kReduced);
-  crackle_run("static-reduced-more", static_release("penalty"),
+  crackle_run("static-full", cli_testing::cracked_release("penalty"));
+  crackle_run("static-reduced", cli_testing::cracked_release("penalty"), kReduced);
+  crackle_run("static-reduced-more", cli_testing::cracked_release("penalty"),
               "--set transient.model=reduced --set transient.reduced.max_frequency=40000");
   const double full0 = first("static-full", "tip u_z");
   const double reduced0 = first("static-reduced", "tip u_z");
@@ -127,7 +110,7 @@ TEST(ReducedRelease, StaticReleaseStartsAtTheFullStaticDeflectionAndRingsAtTheFu
 
 // Without contact the reduced model drops the crack pairs and rings at the open body's frequency.
 TEST(ReducedRelease, WithoutContactTheReducedModelRingsAtTheOpenFrequency) {
-  crackle_run("open-reduced", static_release("none"), kReduced);
+  crackle_run("open-reduced", cli_testing::cracked_release("none"), kReduced);
   const nlohmann::json comparison = ringdown(read_json(scratch() / "open-reduced" / "spectrum.json"))["modal_comparison"];
   EXPECT_EQ(comparison["reference"], "open");
   EXPECT_EQ(comparison["mode"], 1);
