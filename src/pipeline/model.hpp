@@ -46,9 +46,13 @@ struct Model {
 contact::ContactOptions scene_contact_options(const scene::Scene& scene);
 
 /// What a model is built for: `mesh.box.grading: auto` grades the box mesh towards the crack front
-/// for modal analysis and leaves it uniform for the full explicit transient (`crackle run`, whose
-/// stable step the smallest graded cell would set).
-enum class MeshUse { modal, transient };
+/// for modal analysis and for the reduced model (the reduced transient and `crackle sweep`, whose
+/// time step is set by the retained modes, not by the smallest cell), and leaves it uniform for the
+/// full explicit transient (whose stable step the smallest graded cell would set).
+enum class MeshUse { modal, transient, reduced };
+
+/// The use of `crackle run`'s model: `reduced` with transient.model: reduced, else `transient`.
+MeshUse run_mesh_use(const scene::Scene& scene);
 
 /// The grading of the box mesh for this use (layers = 0: none).
 mesh::Grading box_grading(const scene::Scene& scene, MeshUse use);

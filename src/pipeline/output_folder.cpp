@@ -50,89 +50,120 @@ std::string name_list(const std::vector<std::string>& names) {
 
 }  // namespace
 
+namespace {
+
+/// What earlier commands recorded in the folder's marker: the files of this command and of others,
+/// and whether this command has an entry (maybe of a killed run).
+struct Recorded {
+  std::set<std::string> own, other;
+  bool earlier_same = false;
+};
+
+Recorded read_marker(const fs::path& directory, const std::string& command) {
+  Recorded recorded;
+  std::error_code error;
+  if (!fs::is_regular_file(directory / kFolderMarker, error)) return recorded;
+  nlohmann::json marker;
+  try {
+    marker = nlohmann::json::parse(io::read_file(directory / kFolderMarker));
+  } catch (const std::exception&) {
+    return recorded;  // a damaged marker: judge the files by their names
+  }
+  if (!marker.is_object() || !marker.contains("commands") || !marker["commands"].is_object()) return recorded;
+  recorded.earlier_same = marker["commands"].contains(command);
+  for (const auto& [name, entry] : marker["commands"].items()) {
+    if (!entry.is_object() || !entry.contains("files") || !entry["files"].is_array()) continue;
+    for (const auto& file : entry["files"]) {
+      if (file.is_string()) (name == command ? recorded.own : recorded.other).insert(file.get<std::string>());
+    }
+  }
+  return recorded;
+}
+
+/// The folder's entries sorted by what the command may do with them.
+struct Listing {
+  std::vector<std::string> temporary;  ///< leftovers of interrupted writes: removed
+  std::vector<std::string> own;        ///< the command's earlier outputs: removed
+  std::vector<std::string> others;     ///< kept; each named with its likely owner for the message
+  std::set<std::string> kept;          ///< names of the entries kept (others and the scene file)
+};
+
+Listing list_folder(const fs::path& directory, const std::string& command, const std::string& scene_path) {
+  const Recorded recorded = read_marker(directory, command);
+  std::error_code error;
+  fs::path scene_file;
+  if (!scene_path.empty()) scene_file = fs::weakly_canonical(fs::absolute(scene_path), error);
+  Listing listing;
+  for (const fs::directory_entry& entry : fs::directory_iterator(directory, error)) {
+    const std::string name = entry.path().filename().string();
+    if (name == kFolderMarker || starts_with(name, ".crackle-write-test.")) continue;
+    if (io::is_temporary_name(name)) {
+      listing.temporary.push_back(name);
+      continue;
+    }
+    std::error_code ignored;
+    if (!scene_file.empty() && fs::weakly_canonical(entry.path(), ignored) == scene_file) {
+      listing.kept.insert(name);
+      continue;
+    }
+    // A run writes the modal outputs too when it has a modal stage: they are its own when its
+    // earlier entry (perhaps of a run killed before it listed them) is there and no other claims them.
+    const bool mine = recorded.own.count(name) ||
+                      (!recorded.other.count(name) &&
+                       (command == "run" ? is_run_output(name) || (recorded.earlier_same && is_modal_output(name))
+                                         : is_modal_output(name)));
+    if (mine && entry.is_regular_file(ignored)) {
+      listing.own.push_back(name);
+    } else {
+      listing.kept.insert(name);
+      const std::string owner = recorded.other.count(name) ? "" : is_modal_output(name) ? " (crackle modal)"
+                                                           : is_run_output(name)        ? " (crackle run)"
+                                                           : is_study_output(name)      ? " (crackle study)"
+                                                                                        : "";
+      listing.others.push_back(name + owner);
+    }
+  }
+  if (error) throw IoError(directory.string() + ": cannot list the output directory (" + error.message() + ")");
+  for (std::vector<std::string>* names : {&listing.temporary, &listing.own, &listing.others})
+    std::sort(names->begin(), names->end());
+  return listing;
+}
+
+/// Removes the temporary and own entries of `listing`, noting on `log` what went.
+void remove_earlier(const fs::path& directory, const std::string& command, const Listing& listing, std::ostream& log) {
+  std::error_code error;
+  for (const std::vector<std::string>* names : {&listing.temporary, &listing.own}) {
+    for (const std::string& name : *names) {
+      fs::remove(directory / name, error);
+      if (error) throw IoError((directory / name).string() + ": cannot remove (" + error.message() + ")");
+    }
+  }
+  const std::vector<std::string>& own = listing.own;
+  const std::vector<std::string>& temporary = listing.temporary;
+  if (own.empty() && temporary.empty()) return;
+  log << "crackle: note: " << directory.string() << ": removed";
+  if (!own.empty()) log << " " << own.size() << " file(s) of an earlier crackle " << command << " (" << name_list(own) << ")";
+  if (!own.empty() && !temporary.empty()) log << " and";
+  if (!temporary.empty()) log << " " << temporary.size() << " leftover(s) of an interrupted write (" << name_list(temporary) << ")";
+  log << "\n";
+}
+
+}  // namespace
+
 OutputFolder::OutputFolder(const fs::path& directory, const std::string& command, const std::string& scene_path,
                            bool overwrite, std::ostream& log)
     : directory_(directory), command_(command), scene_path_(scene_path) {
   std::error_code exists_error;
   created_ = !fs::exists(directory, exists_error);
   io::check_writable_directory(directory);
-  // What earlier runs recorded.
-  nlohmann::json marker = nlohmann::json::object();
-  std::error_code error;
-  if (fs::is_regular_file(directory / kFolderMarker, error)) {
-    try {
-      marker = nlohmann::json::parse(io::read_file(directory / kFolderMarker));
-    } catch (const std::exception&) {
-      marker = nlohmann::json::object();  // a damaged marker: judge the files by their names
-    }
-  }
-  std::set<std::string> recorded_own, recorded_other;
-  bool earlier_same = false;  // the marker has an entry of this command (maybe of a killed run)
-  if (marker.is_object() && marker.contains("commands") && marker["commands"].is_object()) {
-    earlier_same = marker["commands"].contains(command);
-    for (const auto& [name, entry] : marker["commands"].items()) {
-      if (!entry.is_object() || !entry.contains("files") || !entry["files"].is_array()) continue;
-      for (const auto& file : entry["files"]) {
-        if (file.is_string()) (name == command ? recorded_own : recorded_other).insert(file.get<std::string>());
-      }
-    }
-  }
-  fs::path scene_file;
-  if (!scene_path.empty()) scene_file = fs::weakly_canonical(fs::absolute(scene_path), error);
-
-  std::vector<std::string> temporary, own, others;
-  for (const fs::directory_entry& entry : fs::directory_iterator(directory, error)) {
-    const std::string name = entry.path().filename().string();
-    if (name == kFolderMarker || starts_with(name, ".crackle-write-test.")) continue;
-    if (io::is_temporary_name(name)) {
-      temporary.push_back(name);
-      continue;
-    }
-    std::error_code ignored;
-    if (!scene_file.empty() && fs::weakly_canonical(entry.path(), ignored) == scene_file) {
-      kept_.insert(name);
-      continue;
-    }
-    // A run writes the modal outputs too when it has a modal stage: they are its own when its
-    // earlier entry (perhaps of a run killed before it listed them) is there and no other claims them.
-    const bool mine = recorded_own.count(name) ||
-                      (!recorded_other.count(name) &&
-                       (command == "run" ? is_run_output(name) || (earlier_same && is_modal_output(name))
-                                         : is_modal_output(name)));
-    if (mine && entry.is_regular_file(ignored)) {
-      own.push_back(name);
-    } else {
-      kept_.insert(name);
-      const std::string owner = recorded_other.count(name) ? "" : is_modal_output(name) ? " (crackle modal)"
-                                                           : is_run_output(name)        ? " (crackle run)"
-                                                           : is_study_output(name)      ? " (crackle study)"
-                                                                                        : "";
-      others.push_back(name + owner);
-    }
-  }
-  if (error) throw IoError(directory.string() + ": cannot list the output directory (" + error.message() + ")");
-  std::sort(temporary.begin(), temporary.end());
-  std::sort(own.begin(), own.end());
-  std::sort(others.begin(), others.end());
-  if (!others.empty() && !overwrite) {
+  Listing listing = list_folder(directory, command, scene_path);
+  if (!listing.others.empty() && !overwrite) {
     throw InputError(directory.string() + ": expected an empty output folder or one of an earlier crackle " + command +
-                     ", got files crackle " + command + " does not own: " + name_list(others) +
+                     ", got files crackle " + command + " does not own: " + name_list(listing.others) +
                      "; choose another folder (-o), or pass --overwrite to write into it anyway (they are kept)");
   }
-  for (const std::vector<std::string>* names : {&temporary, &own}) {
-    for (const std::string& name : *names) {
-      fs::remove(directory / name, error);
-      if (error) throw IoError((directory / name).string() + ": cannot remove (" + error.message() + ")");
-    }
-  }
-  if (!own.empty() || !temporary.empty()) {
-    log << "crackle: note: " << directory.string() << ": removed";
-    if (!own.empty()) log << " " << own.size() << " file(s) of an earlier crackle " << command << " (" << name_list(own) << ")";
-    if (!own.empty() && !temporary.empty()) log << " and";
-    if (!temporary.empty())
-      log << " " << temporary.size() << " leftover(s) of an interrupted write (" << name_list(temporary) << ")";
-    log << "\n";
-  }
+  remove_earlier(directory, command, listing, log);
+  kept_ = std::move(listing.kept);
   started_ = fs::file_time_type::clock::now();
   write_marker("running", {});
 }

@@ -29,8 +29,9 @@ inline Result crackle(const std::string& arguments, const std::string& environme
 /// The steel cantilever 0.2 x 0.02 x 0.01 m of p = 1 clamped at x = 0 that the end-to-end tests
 /// share, meshed with `cells` ("[10, 1, 1]"), with a half-depth edge crack from the top face at
 /// x = 0.04 unless `with_crack` is false: the start of a scene, the sections after `boundary`.
+/// Ungraded (`grading: none`), so that the full and the reduced model run on the same mesh.
 inline std::string cantilever(const std::string& cells, bool with_crack = true) {
-  std::string text = "mesh:\n  box: {size: [0.2, 0.02, 0.01], cells: " + cells + ", order: 1}\n"
+  std::string text = "mesh:\n  box: {size: [0.2, 0.02, 0.01], cells: " + cells + ", order: 1, grading: none}\n"
                      "material: {E: 210.0e9, nu: 0.3, rho: 7850.0}\n"
                      "boundary:\n  - {face: x-, fix: [x, y, z]}\n";
   if (with_crack) text += "crack:\n  plane: {normal: x, at: 0.04}\n  region: {y: [0.0, 0.02], z: [0.005, 0.01]}\n";
