@@ -193,8 +193,9 @@ if want reduced-composite; then
   echo "### Reduced vs full transient: data/composite-plate.yaml cut to ${COMPOSITE_PERIODS:-12} periods (no steady-state stop)"
   load
   periods="${COMPOSITE_PERIODS:-12}"
+  # Both models on the same (ungraded) mesh.
   cut=(--set transient.periods="$periods" --set spectrum.steady_state.tolerance=0 --set spectrum.steady_state.min_periods=4
-       --set spectrum.steady_state.window_periods=4)
+       --set spectrum.steady_state.window_periods=4 --set mesh.box.grading.mode=none)
   cache="$out/composite-cache"
   rm -rf "$cache"
   [[ -f "${COMPOSITE_FULL_DIR:-$out/composite-full}/run.json" ]] || \
