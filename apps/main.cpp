@@ -210,7 +210,7 @@ int main(int argc, char** argv) {
   modal_command->add_option("--solver", modal.solver, "slepc or arpack (overrides modal.solver)")
       ->check(CLI::IsMember({"slepc", "arpack"}));
   modal_command->add_option("--modal-cache", modal.modal_cache,
-                            "Folder where the uncracked solve is looked up and stored (shared by study cases)");
+                            "Folder where the modal solves (by fingerprint of K and M) and the reduced model are looked up and stored (shared by study cases)");
   modal_command->add_flag("--overwrite", modal.overwrite,
                           "Write into a folder that holds files crackle modal did not write (they are kept)");
   modal_command->add_option("--petsc", modal_petsc, "PETSc/SLEPc options, e.g. --petsc \"-eps_view\" (repeatable)");
@@ -227,7 +227,7 @@ int main(int argc, char** argv) {
   run_command->add_option("--set", run.overrides, "Override a scene value: --set key.path=value (repeatable)");
   run_command->add_option("-o,--output", run.output_directory, "Output directory")->capture_default_str();
   run_command->add_option("--modal-cache", run.modal_cache,
-                          "Folder where the uncracked solve is looked up and stored (shared by study cases)");
+                          "Folder where the modal solves (by fingerprint of K and M) and the reduced model are looked up and stored (shared by study cases)");
   run_command->add_flag("-q,--quiet", quiet, "No progress line");
   run_command->add_flag("--overwrite", run.overwrite,
                         "Write into a folder that holds files crackle run did not write (they are kept); the files "
@@ -247,7 +247,7 @@ int main(int argc, char** argv) {
   sweep_command->add_option("--set", sweep.overrides, "Override a scene value: --set key.path=value (repeatable)");
   sweep_command->add_option("-o,--output", sweep.output_directory, "Output directory")->capture_default_str();
   sweep_command->add_option("--modal-cache", sweep.modal_cache,
-                            "Folder where the uncracked solve (and the reduced model) are looked up and stored");
+                            "Folder where the modal solves (by fingerprint of K and M) and the reduced model are looked up and stored");
   sweep_command->add_flag("-q,--quiet", sweep_quiet, "No progress line");
 
   study::StudyOptions study_options;
@@ -263,7 +263,7 @@ int main(int argc, char** argv) {
   study_command->add_option("-j,--jobs", study_options.jobs, "Cases at a time (default: the cores)")
       ->check(above(0, true, "a positive integer"));
   study_command->add_flag("--retry-failed", study_options.retry_failed, "Rerun cases recorded as failed");
-  study_command->add_flag("--no-modal-cache", no_modal_cache, "Solve the uncracked modes in every case");
+  study_command->add_flag("--no-modal-cache", no_modal_cache, "Solve the modes (and the reduced model) in every case");
   study_command->add_option("--case-timeout", study_options.case_timeout_s,
                             "Stop a case after this many seconds (default: no limit)")
       ->check(above(0, false, "a positive number of seconds"));

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "contact/contact_force.hpp"
+#include "bench_args.hpp"
 #include "core/resources.hpp"
 #include "fem/material.hpp"
 #include "mesh/box.hpp"
@@ -22,13 +23,7 @@
 
 namespace {
 
-std::vector<double> parse_list(const std::string& text) {
-  std::vector<double> values;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) values.push_back(std::stod(item));
-  return values;
-}
+using crackle::bench::parse_list;
 
 }  // namespace
 

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Runs the benchmarks and prints Markdown tables for docs/benchmarks.md.
-# Usage: scripts/bench.sh [assembly|modal|modal-scale|transient|spectrum|study|reduced|sweep|all]   (default all)
+# Usage: scripts/bench.sh [assembly|modal|modal-scale|transient|spectrum|study|reduced|reduced-scale|reduced-composite|sweep|all]   (default all)
 # (sweep: data/beam.yaml by harmonic balance (cold cache) and by stepped sine; cost per point vs H)
 # (reduced: data/beam.yaml full vs transient.model=reduced; FULL_DIR=dir reuses a full run's outputs)
+# (reduced-scale: bench_reduced, cost per step vs crack pairs (REDUCED_PAIRS, default 100..5000) and modes)
+# (reduced-composite: data/composite-plate.yaml full vs reduced, both cut to COMPOSITE_PERIODS periods (default 12))
 # (modal = work-precision + scale; modal-scale = the scale part alone)
 #
 # Environment:
@@ -19,8 +21,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 what="${1:-all}"
-case "$what" in assembly|modal|modal-scale|transient|spectrum|study|reduced|sweep|all) ;; *)
-  echo "usage: scripts/bench.sh [assembly|modal|modal-scale|transient|spectrum|study|reduced|sweep|all]" >&2; exit 2 ;;
+case "$what" in assembly|modal|modal-scale|transient|spectrum|study|reduced|reduced-scale|reduced-composite|sweep|all) ;; *)
+  echo "usage: scripts/bench.sh [assembly|modal|modal-scale|transient|spectrum|study|reduced|reduced-scale|reduced-composite|sweep|all]" >&2; exit 2 ;;
 esac
 if [[ -n "${BUILD:-}" ]]; then
   [[ "${BENCH_NO_BUILD:-0}" == 1 ]] || cmake --build "$BUILD" -j"$(nproc)" >/dev/null
@@ -173,6 +175,51 @@ for d in sys.argv[2:]:
     scale = 2.0 if "cached" in d else 1.0  # the cached case doubles the amplitude
     print(f"| {d.split('/')[-1]} | {t['modes']} | {t['steps_per_period']} | {t['steps']} | {w:.2f} | {st['transient']:.2f} | "
           f"{t['reduction_cached']} | {a1 / scale / fa1 - 1:.1e} | {i['A2/A1'] / fi['A2/A1'] - 1:.1e} | {i['A3/A1'] / fi['A3/A1'] - 1:.1e} |")
+PY
+fi
+
+if want reduced-scale; then
+  echo
+  echo "### Reduced transient: cost per step against crack pairs and modes (bench_reduced, one process)"
+  load
+  /usr/bin/time -v -o "$out/reduced-scale-time.txt" "$BUILD"/bench/bench_reduced \
+    --pairs "${REDUCED_PAIRS:-100,300,1000,3000,5000}" --modes 10,40
+  echo
+  echo "peak RSS of the whole sweep over sizes: $(awk '/Maximum resident/{print int($6/1024)}' "$out/reduced-scale-time.txt") MiB"
+fi
+
+if want reduced-composite; then
+  echo
+  echo "### Reduced vs full transient: data/composite-plate.yaml cut to ${COMPOSITE_PERIODS:-12} periods (no steady-state stop)"
+  load
+  periods="${COMPOSITE_PERIODS:-12}"
+  # Both models on the same (ungraded) mesh.
+  cut=(--set transient.periods="$periods" --set spectrum.steady_state.tolerance=0 --set spectrum.steady_state.min_periods=4
+       --set spectrum.steady_state.window_periods=4 --set mesh.box.grading.mode=none)
+  cache="$out/composite-cache"
+  rm -rf "$cache"
+  [[ -f "${COMPOSITE_FULL_DIR:-$out/composite-full}/run.json" ]] || \
+    "$crackle" run data/composite-plate.yaml -o "$out/composite-full" -q "${cut[@]}" >/dev/null
+  "$crackle" run data/composite-plate.yaml -o "$out/composite-reduced-cold" -q "${cut[@]}" --set transient.model=reduced \
+    --modal-cache "$cache" >/dev/null
+  "$crackle" run data/composite-plate.yaml -o "$out/composite-reduced-cached" -q "${cut[@]}" --set transient.model=reduced \
+    --modal-cache "$cache" >/dev/null
+  python3 - "${COMPOSITE_FULL_DIR:-$out/composite-full}" "$out/composite-reduced-cold" "$out/composite-reduced-cached" <<'PY'
+import json, sys
+def read(d):
+    r = json.load(open(d + "/run.json")); t = json.load(open(d + "/transient.json")); s = json.load(open(d + "/spectrum.json"))
+    p = s["probes"]["top"]; a1 = [h["amplitude"] for h in p["harmonics"] if h["order"] == 1][0]
+    st = {x["name"]: x["seconds"] for x in r["stages"]}
+    return r["wall_s"], st, t, a1, p["indices"]
+fw, fst, ft, fa1, fi = read(sys.argv[1])
+print("| run | modes | pairs | steps | us/step | wall s | modal s | transient s | A1 | A2/A1 | A3/A1 | A1/2/A1 |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+def row(name, w, st, t, a1, i):
+    print(f"| {name} | {t.get('modes', '-')} | {t.get('pairs', '-')} | {t['steps']} | {1e6 * t['wall_s'] / t['steps']:.1f} | {w:.1f} | "
+          f"{st['modal']:.1f} | {st['transient']:.1f} | {a1:.4e} | {i['A2/A1']:.4e} | {i['A3/A1']:.4e} | {i.get('A1/2/A1', float('nan')):.3e} |")
+row("full", fw, fst, ft, fa1, fi)
+for d in sys.argv[2:]:
+    row(d.split('/')[-1], *read(d))
 PY
 fi
 

@@ -9,16 +9,11 @@
 namespace crackle::modal {
 namespace {
 
-constexpr char kMagic[8] = {'C', 'R', 'K', 'M', 'O', 'D', 'E', '1'};
+constexpr char kMagic[8] = {'C', 'R', 'K', 'M', 'O', 'D', 'E', '2'};
 
-/// FNV-1a over raw bytes.
-void mix(std::uint64_t& hash, const void* data, std::size_t bytes) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < bytes; ++i) {
-    hash ^= p[i];
-    hash *= 1099511628211ull;
-  }
-}
+constexpr std::uint64_t kPrime = 1099511628211ull;
+
+void mix(std::uint64_t& hash, const void* data, std::size_t bytes) { fingerprint_mix(hash, data, bytes); }
 
 void mix_matrix(std::uint64_t& hash, const SparseMatrix& matrix) {
   const Index rows = static_cast<Index>(matrix.rows()), nonzeros = static_cast<Index>(matrix.nonZeros());
@@ -50,8 +45,24 @@ bool get_matrix(std::istream& in, MatrixX& matrix) {
 
 }  // namespace
 
+void fingerprint_mix(std::uint64_t& hash, const void* data, std::size_t bytes) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  const std::size_t words = bytes / sizeof(std::uint64_t);
+  for (std::size_t i = 0; i < words; ++i) {
+    std::uint64_t word;
+    std::memcpy(&word, p + i * sizeof word, sizeof word);
+    hash ^= word;
+    hash *= kPrime;
+    hash ^= hash >> 32;
+  }
+  for (std::size_t i = words * sizeof(std::uint64_t); i < bytes; ++i) {
+    hash ^= p[i];
+    hash *= kPrime;
+  }
+}
+
 std::uint64_t problem_key(const SparseMatrix& stiffness, const SparseMatrix& mass, const ModalOptions& options) {
-  std::uint64_t hash = 1469598103934665603ull;
+  std::uint64_t hash = kFingerprintSeed;
   mix_matrix(hash, stiffness);
   mix_matrix(hash, mass);
   const std::int64_t settings[3] = {options.modes, static_cast<std::int64_t>(options.solver), options.max_iterations};

@@ -133,10 +133,11 @@ CholmodFactor::~CholmodFactor() {
   cholmod_finish(&common_);
 }
 
-void CholmodFactor::solve(const double* x, double* y) {
+void CholmodFactor::solve(const double* x, double* y, Index columns) {
   cholmod_dense rhs{};
-  rhs.nrow = rhs.d = rhs.nzmax = static_cast<std::size_t>(rows_);
-  rhs.ncol = 1;
+  rhs.nrow = rhs.d = static_cast<std::size_t>(rows_);
+  rhs.ncol = static_cast<std::size_t>(columns);
+  rhs.nzmax = rhs.nrow * rhs.ncol;
   rhs.xtype = CHOLMOD_REAL;
   rhs.dtype = CHOLMOD_DOUBLE;
   rhs.x = const_cast<double*>(x);
@@ -144,7 +145,7 @@ void CholmodFactor::solve(const double* x, double* y) {
     fail("cholmod_solve2");
   }
   const auto* values = static_cast<const double*>(solution_->x);
-  std::copy(values, values + rows_, y);
+  std::copy(values, values + rows_ * columns, y);
 }
 
 void CholmodFactor::fail(const char* what) {

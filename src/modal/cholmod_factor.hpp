@@ -22,8 +22,9 @@ class CholmodFactor {
   CholmodFactor(const CholmodFactor&) = delete;
   CholmodFactor& operator=(const CholmodFactor&) = delete;
 
-  /// y = A^{-1} x (x and y of length n, may not alias).
-  void solve(const double* x, double* y);
+  /// y = A^{-1} x (x and y of length n, may not alias); `columns` right-hand sides at once (x and y
+  /// n x columns, column-major: one blocked, BLAS-3 solve).
+  void solve(const double* x, double* y, Index columns = 1);
 
  private:
   std::vector<Index> compressed_ordering(const SparseMatrix& matrix);

@@ -48,9 +48,9 @@ struct ModalOptions {
   /// at least 1e6 times below the largest one computed (see solve_modes).
   double rigid_tolerance = 1e-6;
   MacWeighting mac = MacWeighting::mass;
-  /// If not empty: the uncracked solve is looked up in (and stored into) this folder, keyed by a
+  /// If not empty: each variant's solve is looked up in (and stored into) this folder, keyed by a
   /// fingerprint of K, M and the options (modal/cache.hpp). A parameter study shares it between
-  /// cases whose uncracked body is the same.
+  /// cases whose body (for the open variant: body and crack) is the same.
   std::filesystem::path cache_directory;
 };
 

@@ -29,7 +29,7 @@ struct ModalCommandOptions {
   std::filesystem::path output_directory = "out";
   int modes = 0;       ///< overrides modal.modes when > 0
   std::string solver;  ///< overrides modal.solver when not empty
-  std::filesystem::path modal_cache;  ///< folder sharing the uncracked solve between runs
+  std::filesystem::path modal_cache;  ///< folder sharing the modal solves and reduced models between runs
   bool overwrite = false;  ///< write into a folder that holds files of others (they are kept)
 };
 
@@ -37,7 +37,7 @@ struct RunCommandOptions {
   std::string scene_path;
   std::vector<std::string> overrides;  ///< `key.path=value`
   std::filesystem::path output_directory = "out";
-  std::filesystem::path modal_cache;  ///< folder sharing the uncracked solve between runs
+  std::filesystem::path modal_cache;  ///< folder sharing the modal solves and reduced models between runs
   bool progress = true;               ///< progress line (also needs transient.progress)
   bool overwrite = false;  ///< write into a folder that holds files of others (they are kept)
 };

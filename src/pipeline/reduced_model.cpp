@@ -1,5 +1,7 @@
 #include "pipeline/reduced_model.hpp"
 
+#include <cmath>
+
 #include "contact/contact.hpp"
 #include "core/errors.hpp"
 #include "core/resources.hpp"
@@ -57,17 +59,40 @@ std::optional<reduced::Reduction> cached(const std::filesystem::path& directory,
   return reduction;
 }
 
+/// Removes the pair rows (the open body without contact).
+void drop_pairs(reduced::ReducedSystem& system) {
+  const Index m = system.n_modes(), o = system.n_outputs();
+  system.friction = false;
+  system.pair_area.resize(0);
+  system.initial_gap.resize(0);
+  system.pair_modes.resize(0, m);
+  system.residual.resize(0, 0);
+  system.load_residual.resize(0);
+  system.output_residual_pairs.resize(o, 0);
+}
+
+/// q = Phi_m^T M u of a field over all DOFs of `system`, and the mass-norm share of u it leaves out.
+VectorX project(const reduced::Reduction& reduction, Index modes, const fem::System& system, const VectorX& field,
+                double& lost) {
+  const VectorX free_field = fem::restrict_to_free(field, system.constraints());
+  const VectorX q = reduction.modal_coordinates(free_field, modes);
+  const VectorX rest = free_field - reduction.shapes.leftCols(modes) * q;
+  lost = std::sqrt(rest.dot(reduction.mass.cwiseProduct(rest)) / free_field.dot(reduction.mass.cwiseProduct(free_field)));
+  return q;
+}
+
 }  // namespace
 
 ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, double excitation_frequency_hz,
-                                 const std::filesystem::path& cache_directory) {
+                                 const std::filesystem::path& cache_directory,
+                                 const transient::InitialConditions* initial) {
   if (!scene.transient) throw InputError(scene.file + ": transient: expected a section for the reduced model");
   Stopwatch clock;
   const scene::TransientSection& section = *scene.transient;
   const bool with_crack = section.variant == "open" && model.mesh.has_crack();
   const fem::System& system = *model.system(with_crack ? mesh::Variant::open : mesh::Variant::uncracked);
   const contact::ContactOptions contact_options = scene_contact_options(scene);
-  const bool friction = with_crack && contact_options.friction_coefficient > 0.0;
+  const bool friction = with_crack && scene.contact.model != "none" && contact_options.friction_coefficient > 0.0;
 
   ReducedModel result;
   std::vector<Index> probe_nodes;
@@ -102,7 +127,8 @@ ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, 
     result.system.output_residual_pairs.setZero();
     result.system.output_residual_load.setZero();
   }
-  if (with_crack) {
+  if (with_crack && scene.contact.model == "none") drop_pairs(result.system);
+  if (with_crack && scene.contact.model != "none") {
     const contact::PenaltyChoice penalty = contact::choose_penalty(model.mesh, model.materials, contact_options);
     result.system.normal_penalty = penalty.normal_penalty;
     result.system.tangential_penalty = penalty.tangential_penalty;
@@ -112,6 +138,15 @@ ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, 
   const transient::RayleighDamping damping = damping_of(scene);
   result.system.rayleigh_alpha = damping.alpha;
   result.system.rayleigh_beta = damping.beta;
+  result.initial_displacement = VectorX::Zero(modes);
+  result.initial_velocity = VectorX::Zero(modes);
+  if (initial && initial->displacement.size() > 0 && initial->displacement.squaredNorm() > 0.0) {
+    result.initial_displacement =
+        project(*reduction, modes, system, initial->displacement, result.initial_displacement_lost);
+  }
+  if (initial && initial->velocity.size() > 0 && initial->velocity.squaredNorm() > 0.0) {
+    result.initial_velocity = project(*reduction, modes, system, initial->velocity, result.initial_velocity_lost);
+  }
   result.modes = static_cast<int>(modes);
   result.pairs = result.system.n_pairs();
   result.computed_modes = static_cast<int>(reduction->n_computed_modes());

@@ -10,6 +10,7 @@
 #include "pipeline/model.hpp"
 #include "reduced/system.hpp"
 #include "scene/scene.hpp"
+#include "transient/excitation.hpp"
 
 namespace crackle::pipeline {
 
@@ -32,15 +33,25 @@ struct ReducedModel {
   double modes_s = 0.0;        ///< eigen-solve time of the reduction (when computed, or when it was cached)
   double flexibility_s = 0.0;  ///< factorisation and static solves of the reduction
   int computed_modes = 0;      ///< modes in the reduction (>= modes: a cached one may hold more)
+  /// Initial modal state (MODEL.md eq. 6) q(0) = Phi^T M U(0), q'(0) = Phi^T M V(0): the reduced state
+  /// nearest to the initial fields in the mass norm; zero without initial fields.
+  VectorX initial_displacement, initial_velocity;
+  /// Mass-norm share of U(0) (and of V(0)) outside the retained modes, ||u - Phi q||_M / ||u||_M
+  /// (0 for a field in their span, NaN for a zero field): what the truncation leaves out of the start.
+  double initial_displacement_lost = 0.0, initial_velocity_lost = 0.0;
 };
 
 /// Builds (or reads from `cache_directory`, when not empty) the reduced model of the scene's
 /// transient variant (open with a crack: pairs and the contact of crack.contact, penalty auto via
 /// contact::choose_penalty; uncracked: no pairs). Damping: alpha and beta, or a ratio at a frequency
 /// in Hz; a ratio at a mode leaves alpha = beta = 0 for the caller (it needs the uncracked modes).
-/// `excitation_frequency_hz` (0 for a pulse) sets the automatic max_frequency. InputError for a free
-/// body, a scene without transient:, or an automatic max_frequency without a harmonic excitation.
+/// `excitation_frequency_hz` (0 for a pulse) sets the automatic max_frequency. `initial`, when given,
+/// holds U(0), V(0) over the DOFs of the transient variant (transient.release, transient.initial):
+/// projected onto the retained modes. With crack.contact.model: none the pairs are left out (the open
+/// body alone). InputError for a scene without transient:, or an automatic max_frequency
+/// without a harmonic excitation.
 ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, double excitation_frequency_hz,
-                                 const std::filesystem::path& cache_directory);
+                                 const std::filesystem::path& cache_directory,
+                                 const transient::InitialConditions* initial = nullptr);
 
 }  // namespace crackle::pipeline

@@ -9,6 +9,7 @@
 #include "core/errors.hpp"
 #include "core/resources.hpp"
 #include "io/files.hpp"
+#include "modal/cache.hpp"
 #include "modal/cholmod_factor.hpp"
 #include "modal/modal.hpp"
 
@@ -18,7 +19,9 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 /// Modes asked in the first eigen-solve of an automatic count; doubled until the highest is above the target.
 constexpr int kFirstModeCount = 12;
-constexpr char kMagic[8] = {'C', 'R', 'K', 'R', 'E', 'D', 'U', '1'};
+/// Right-hand sides of one blocked static solve (n_free x kSolveBlock doubles, twice, in memory).
+constexpr Index kSolveBlock = 32;
+constexpr char kMagic[8] = {'C', 'R', 'K', 'R', 'E', 'D', 'U', '2'};
 
 /// One pair row of B: weights over free DOFs (sparse, at most 6 entries).
 struct Row {
@@ -85,14 +88,15 @@ SparseMatrix diagonal(const VectorX& values) {
 }
 
 /// Lowest modes of (K, M): a fixed count, or every mode up to `target_hz` (solving for more as needed).
-modal::ModeSet lowest_modes(const SparseMatrix& stiffness, const SparseMatrix& mass, const ReductionOptions& options) {
+modal::ModeSet lowest_modes(const SparseMatrix& stiffness, const SparseMatrix& mass, const ReductionOptions& options,
+                            int n_rigid) {
   modal::ModalOptions settings;
   settings.solver = modal::Solver::arpack;
   settings.lumped_mass = true;
   const Index n_free = stiffness.rows();
   if (options.modes > 0) {
     settings.modes = options.modes;
-    return modal::solve_modes(stiffness, mass, settings, 0);
+    return modal::solve_modes(stiffness, mass, settings, n_rigid);
   }
   if (!(options.max_frequency_hz > 0.0)) {
     throw InputError("reduced model: expected a mode count or a positive maximum frequency, got neither");
@@ -100,20 +104,60 @@ modal::ModeSet lowest_modes(const SparseMatrix& stiffness, const SparseMatrix& m
   const double target = options.max_frequency_hz * std::max(1.0, options.frequency_margin);
   settings.modes = static_cast<int>(std::min<Index>(kFirstModeCount, n_free - 1));
   for (;;) {
-    modal::ModeSet modes = modal::solve_modes(stiffness, mass, settings, 0);
+    modal::ModeSet modes = modal::solve_modes(stiffness, mass, settings, n_rigid);
     if (modes.n_modes() > 0 && modes.frequencies_hz[modes.n_modes() - 1] > target) return modes;
     if (settings.modes >= n_free / 2) return modes;  // all the body has (small test meshes)
     settings.modes = static_cast<int>(std::min<Index>(2 * settings.modes, n_free / 2));
   }
 }
 
-void mix(std::uint64_t& hash, const void* data, std::size_t bytes) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < bytes; ++i) {
-    hash ^= p[i];
-    hash *= 1099511628211ull;
+/// The elastic static flexibility G_el = sum over the elastic modes of phi phi^T / omega^2 applied to
+/// blocks of right-hand sides: K^-1 for a held body (one CHOLMOD factor). A free body (rigid modes Psi,
+/// mass-normalised) has K singular: G_el b is the solution x orthogonal (in M) to Psi of K x = P^T b,
+/// P^T = I - M Psi Psi^T (the load balanced by the rigid-body inertia), found by the fixed point
+/// (K + sigma M) x_{k+1} = P^T b + sigma M x_k, whose elastic error shrinks by sigma/(omega^2 + sigma)
+/// per iteration (sigma = 1e-2 omega_1^2: about 1e-2).
+class StaticFlexibility {
+ public:
+  StaticFlexibility(const SparseMatrix& stiffness, const SparseMatrix& mass, const MatrixX& rigid_shapes,
+                    double lowest_elastic_omega)
+      : mass_(mass.diagonal()),
+        rigid_(rigid_shapes),
+        shift_(rigid_shapes.cols() > 0 ? kShiftFraction * lowest_elastic_omega * lowest_elastic_omega : 0.0),
+        factor_(stiffness, mass, -shift_, "reduced model: static solve with K") {}
+
+  /// Overwrites `block` (n_free x columns) by G_el block.
+  void apply(MatrixX& block) {
+    MatrixX solution(block.rows(), block.cols());
+    if (rigid_.cols() == 0) {
+      factor_.solve(block.data(), solution.data(), block.cols());
+      block = solution;
+      return;
+    }
+    block -= mass_.asDiagonal() * (rigid_ * (rigid_.transpose() * block));  // P^T b
+    factor_.solve(block.data(), solution.data(), block.cols());
+    for (int iteration = 0; iteration < kMaxIterations; ++iteration) {
+      MatrixX rhs = block + shift_ * (mass_.asDiagonal() * solution);
+      MatrixX next(block.rows(), block.cols());
+      factor_.solve(rhs.data(), next.data(), block.cols());
+      const double change = (next - solution).norm(), size = next.norm();
+      solution = std::move(next);
+      if (!(change > kTolerance * size)) break;
+    }
+    block = solution - rigid_ * (rigid_.transpose() * (mass_.asDiagonal() * solution));
   }
-}
+
+ private:
+  static constexpr double kShiftFraction = 1e-2;
+  static constexpr double kTolerance = 1e-13;
+  static constexpr int kMaxIterations = 30;
+  VectorX mass_;
+  MatrixX rigid_;
+  double shift_;
+  modal::CholmodFactor factor_;
+};
+
+void mix(std::uint64_t& hash, const void* data, std::size_t bytes) { modal::fingerprint_mix(hash, data, bytes); }
 
 std::filesystem::path cache_file(const std::filesystem::path& directory, std::uint64_t key) {
   char name[48];
@@ -161,54 +205,75 @@ std::optional<Index> Reduction::modes_up_to(double f_hz) const {
   return count;
 }
 
+VectorX Reduction::modal_coordinates(const VectorX& free_field, Index modes) const {
+  if (free_field.size() != shapes.rows() || modes > shapes.cols()) {
+    throw InputError("reduced model: a field of " + std::to_string(free_field.size()) + " free DOFs projected on " +
+                     std::to_string(modes) + " modes; the reduction has " + std::to_string(shapes.rows()) +
+                     " free DOFs and " + std::to_string(shapes.cols()) + " modes");
+  }
+  return shapes.leftCols(modes).transpose() * mass.cwiseProduct(free_field);
+}
+
 Reduction compute_reduction(const fem::System& system, const ReductionOptions& options,
                             const std::vector<Index>& output_nodes, const fem::LoadShape& load) {
   const fem::Constraints& constraints = system.constraints();
   const int n_rigid = modal::count_rigid_body_modes(system.mesh(), system.dofs(), constraints);
-  if (n_rigid > 0) {
-    throw InputError("reduced model: the " + std::string(mesh::variant_name(system.variant())) + " body has " +
-                     std::to_string(n_rigid) +
-                     " rigid-body modes; the reduced model needs a body held by Dirichlet conditions "
-                     "(boundary:) so that K is positive definite (use transient.model: full)");
-  }
   Reduction reduction;
   reduction.friction = options.friction;
   Stopwatch clock;
   const SparseMatrix stiffness = fem::restrict_to_free(system.assemble_stiffness(), constraints);
   const SparseMatrix mass = diagonal(fem::restrict_to_free(system.lumped_mass(), constraints));
-  const modal::ModeSet modes = lowest_modes(stiffness, mass, options);
+  const modal::ModeSet modes = lowest_modes(stiffness, mass, options, n_rigid);
   reduction.modes_s = clock.seconds();
+  // Rigid-body modes first (omega = 0), then the elastic ones.
+  const Index n_zero = modes.n_rigid();
+  reduction.shapes.resize(stiffness.rows(), n_zero + modes.n_modes());
+  reduction.shapes << modes.rigid_shapes, modes.shapes;
+  reduction.omega = VectorX::Zero(reduction.shapes.cols());
+  reduction.omega.tail(modes.n_modes()) = 2.0 * kPi * modes.frequencies_hz;
+  reduction.mass = mass.diagonal();
 
   Stopwatch flexibility_clock;
   std::vector<Row> pair_rows, output_rows;
   build_rows(system, options.friction, output_nodes, pair_rows, output_rows, reduction.pair_area);
-  const Index m = modes.n_modes(), c = static_cast<Index>(pair_rows.size()), o = static_cast<Index>(output_rows.size());
-  reduction.omega = 2.0 * kPi * modes.frequencies_hz;
+  const Index m = reduction.shapes.cols(), c = static_cast<Index>(pair_rows.size());
+  const Index o = static_cast<Index>(output_rows.size());
   reduction.pair_modes.resize(c, m);
   reduction.output_modes.resize(o, m);
   for (Index r = 0; r < m; ++r) {
-    const VectorX phi = modes.shapes.col(r);
+    const VectorX phi = reduction.shapes.col(r);
     for (Index i = 0; i < c; ++i) reduction.pair_modes(i, r) = pair_rows[i].dot(phi);
     for (Index i = 0; i < o; ++i) reduction.output_modes(i, r) = output_rows[i].dot(phi);
   }
   const VectorX load_free = fem::restrict_to_free(load.dense(system.n_dofs()), constraints);
-  reduction.load_modal = modes.shapes.transpose() * load_free;
+  reduction.load_modal = reduction.shapes.transpose() * load_free;
 
-  // Static images: one solve per pair row and one for the load, only rows B and C kept.
-  modal::CholmodFactor factor(stiffness, mass, 0.0, "reduced model: static solve with K");
+  // Static images: one solve per pair row (kSolveBlock rows at once) and one for the load, only rows
+  // B and C kept.
+  const double lowest = modes.n_modes() > 0 ? reduction.omega[n_zero] : 0.0;
+  StaticFlexibility flexibility(stiffness, mass, modes.rigid_shapes, lowest);
   const Index n_free = stiffness.rows();
-  VectorX rhs(n_free), solution(n_free);
   reduction.pair_static.resize(c, c);
   reduction.output_static.resize(o, c);
-  for (Index j = 0; j < c; ++j) {
-    rhs.setZero();
-    pair_rows[j].add_to(rhs, 1.0);
-    factor.solve(rhs.data(), solution.data());
-    for (Index i = 0; i < c; ++i) reduction.pair_static(i, j) = pair_rows[i].dot(solution);
-    for (Index i = 0; i < o; ++i) reduction.output_static(i, j) = output_rows[i].dot(solution);
+  for (Index first = 0; first < c; first += kSolveBlock) {
+    const Index columns = std::min<Index>(kSolveBlock, c - first);
+    MatrixX block = MatrixX::Zero(n_free, columns);
+    for (Index k = 0; k < columns; ++k) {
+      VectorX column = VectorX::Zero(n_free);
+      pair_rows[first + k].add_to(column, 1.0);
+      block.col(k) = column;
+    }
+    flexibility.apply(block);
+    for (Index k = 0; k < columns; ++k) {
+      const VectorX column = block.col(k);
+      for (Index i = 0; i < c; ++i) reduction.pair_static(i, first + k) = pair_rows[i].dot(column);
+      for (Index i = 0; i < o; ++i) reduction.output_static(i, first + k) = output_rows[i].dot(column);
+    }
   }
   reduction.pair_static = 0.5 * (reduction.pair_static + reduction.pair_static.transpose()).eval();
-  factor.solve(load_free.data(), solution.data());
+  MatrixX load_block = load_free;
+  flexibility.apply(load_block);
+  const VectorX solution = load_block.col(0);
   reduction.pair_static_load.resize(c);
   reduction.output_static_load.resize(o);
   for (Index i = 0; i < c; ++i) reduction.pair_static_load[i] = pair_rows[i].dot(solution);
@@ -230,7 +295,9 @@ ReducedSystem reduced_system(const Reduction& reduction, Index modes, double loa
   system.pair_modes = reduction.pair_modes.leftCols(modes);
   system.output_modes = reduction.output_modes.leftCols(modes);
   system.load_modal = load_scale * reduction.load_modal.head(modes);
-  const VectorX inverse_square = system.omega.array().square().inverse().matrix();
+  // Rigid-body modes (omega 0) hold no static flexibility: the static images are elastic only.
+  VectorX inverse_square = VectorX::Zero(modes);
+  for (Index r = 0; r < modes; ++r) inverse_square[r] = system.omega[r] > 0.0 ? 1.0 / (system.omega[r] * system.omega[r]) : 0.0;
   const MatrixX pair_scaled = system.pair_modes * inverse_square.asDiagonal();
   const MatrixX output_scaled = system.output_modes * inverse_square.asDiagonal();
   system.residual = reduction.pair_static - pair_scaled * system.pair_modes.transpose();
@@ -244,7 +311,7 @@ ReducedSystem reduced_system(const Reduction& reduction, Index modes, double loa
 
 std::uint64_t reduction_key(const fem::System& system, const std::vector<Index>& output_nodes,
                             const fem::LoadShape& load, bool friction) {
-  std::uint64_t hash = 1469598103934665603ull;
+  std::uint64_t hash = modal::kFingerprintSeed;
   mix(hash, kMagic, sizeof kMagic);
   const SparseMatrix stiffness = fem::restrict_to_free(system.assemble_stiffness(), system.constraints());
   const Index rows = stiffness.rows(), nonzeros = stiffness.nonZeros();
@@ -290,14 +357,15 @@ std::optional<Reduction> load_cached_reduction(const std::filesystem::path& dire
   if (!get(in, reduction.omega) || !get(in, reduction.pair_modes) || !get(in, reduction.output_modes) ||
       !get(in, reduction.load_modal) || !get(in, reduction.pair_static) || !get(in, reduction.output_static) ||
       !get(in, reduction.pair_static_load) || !get(in, reduction.output_static_load) ||
-      !get(in, reduction.pair_area)) {
+      !get(in, reduction.pair_area) || !get(in, reduction.shapes) || !get(in, reduction.mass)) {
     return std::nullopt;
   }
   const Index m = reduction.omega.size(), c = reduction.pair_static.rows(), o = reduction.output_static.rows();
   if (reduction.pair_modes.rows() != c || reduction.pair_modes.cols() != m || reduction.output_modes.cols() != m ||
       reduction.output_modes.rows() != o || reduction.load_modal.size() != m || reduction.pair_static.cols() != c ||
       reduction.output_static.cols() != c || reduction.pair_static_load.size() != c ||
-      reduction.output_static_load.size() != o) {
+      reduction.output_static_load.size() != o || reduction.shapes.cols() != m ||
+      reduction.mass.size() != reduction.shapes.rows()) {
     return std::nullopt;
   }
   return reduction;
@@ -313,7 +381,8 @@ void store_cached_reduction(const std::filesystem::path& directory, std::uint64_
   for (const MatrixX& matrix :
        {MatrixX(reduction.omega), reduction.pair_modes, reduction.output_modes, MatrixX(reduction.load_modal),
         reduction.pair_static, reduction.output_static, MatrixX(reduction.pair_static_load),
-        MatrixX(reduction.output_static_load), MatrixX(reduction.pair_area)}) {
+        MatrixX(reduction.output_static_load), MatrixX(reduction.pair_area), reduction.shapes,
+        MatrixX(reduction.mass)}) {
     put(out, matrix);
   }
   io::write_file_atomic(cache_file(directory, key), out);

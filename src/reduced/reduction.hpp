@@ -34,7 +34,7 @@ struct ReductionOptions {
 
 /// The expensive part of a reduction, for M computed modes and c pair rows, o outputs.
 struct Reduction {
-  VectorX omega;             ///< omega_r of all computed modes [rad/s], ascending (M)
+  VectorX omega;             ///< omega_r of all computed modes [rad/s], ascending (M): rigid-body modes (0) first
   MatrixX pair_modes;        ///< B Phi (c x M)
   MatrixX output_modes;      ///< C Phi (o x M)
   VectorX load_modal;        ///< Phi^T f_hat (M) for the load shape given (unit amplitude in the pipeline)
@@ -43,6 +43,8 @@ struct Reduction {
   VectorX pair_static_load;  ///< B K^-1 f_hat (c)
   VectorX output_static_load;  ///< C K^-1 f_hat (o)
   VectorX pair_area;         ///< area of each split pair [m^2]
+  MatrixX shapes;            ///< Phi over the free DOFs (n_free x M), mass-normalised (initial states)
+  VectorX mass;              ///< the lumped mass over the free DOFs (n_free) that normalises Phi
   bool friction = false;
   double modes_s = 0.0;        ///< eigen-solve time [s]
   double flexibility_s = 0.0;  ///< factorisation and static solves [s]
@@ -51,6 +53,9 @@ struct Reduction {
   /// Number of computed modes with frequency <= f_hz; nullopt when the computed set might miss some
   /// (its highest mode is not above f_hz).
   std::optional<Index> modes_up_to(double f_hz) const;
+  /// Modal coordinates \f$\Phi_m^T M u\f$ of a field u over the free DOFs, first `modes` modes: the
+  /// state of the reduced model nearest to u in the mass norm (exact for u in the span of those modes).
+  VectorX modal_coordinates(const VectorX& free_field, Index modes) const;
 };
 
 /// The split crack pairs of the mesh (minus != plus), in mesh order: those that carry force.
@@ -59,8 +64,9 @@ std::vector<mesh::CrackPair> split_pairs(const mesh::Mesh& mesh);
 /// The orthonormal tangents (a_1, a_2) of a pair's plane normal to n+ used for the friction rows.
 std::pair<Vec3, Vec3> pair_tangents(const Vec3& normal);
 
-/// Computes modes and static images of `system` (Dirichlet conditions must hold it: a free body is
-/// refused with InputError). Pairs: every split crack pair of the mesh when the variant is open,
+/// Computes modes and static images of `system`. A body (or a piece of it, e.g. a block cut off by the
+/// crack) free to move keeps its rigid-body modes as modes of frequency 0, first in the mode list, and
+/// the static images are those of the elastic flexibility (rigid motions projected out, HYBRID.md §2). Pairs: every split crack pair of the mesh when the variant is open,
 /// none otherwise. Outputs: 3 rows per node of `output_nodes` (components x, y, z; a held DOF
 /// gives a zero row). `load`: the load shape f_hat.
 Reduction compute_reduction(const fem::System& system, const ReductionOptions& options,

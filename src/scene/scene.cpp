@@ -222,7 +222,7 @@ Param build_parameters() {
              {"open", "uncracked"}).defaults_to("open"),
       choice("model", "full: the explicit finite-element model (MODEL.md eqs. 24-28); reduced: modes of the "
                       "variant + residual flexibility at the crack pairs (HYBRID.md sec. 2-3), implicit steps set "
-                      "by accuracy; needs a body held by boundary: conditions.", {"full", "reduced"})
+                      "by accuracy (rigid-body modes of a free body or piece are kept as modes of frequency 0).", {"full", "reduced"})
           .defaults_to("full"),
       map_of("reduced", "The reduced model (transient.model: reduced).", {
         integer("modes", "Modes kept; auto: every mode of the variant up to max_frequency.").at_least(1)
@@ -263,7 +263,9 @@ Param build_parameters() {
         }).optional_section(),
       }).optional_section(),
       list_of("initial", "Initial velocity and displacement (MODEL.md eq. 6), uniform over the nodes in a "
-                         "coordinate range (all nodes when no range is given).", {
+                         "coordinate range (all nodes when no range is given). With transient.model: reduced the fields "
+                         "(and a release) are projected on the retained modes (transient.json initial_state: the "
+                         "share left out).", {
         number("velocity", "Initial velocity.").with_unit("m/s").list(3).defaults_to("[0, 0, 0]"),
         number("displacement", "Initial displacement.").with_unit("m").list(3).defaults_to("[0, 0, 0]"),
         number("x", "Range along x.").with_unit("m").list(2),
@@ -633,10 +635,6 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
     if (transient.time_step) {
       values.fail("transient.time_step", "auto with transient.model: reduced (its step is set by "
                   "transient.reduced.steps_per_period)", format_number(*transient.time_step));
-    }
-    if (!transient.initial.empty()) {
-      values.fail("transient.initial", "no initial fields with transient.model: reduced (not supported yet; "
-                  "start from rest, e.g. with a pulse)", std::to_string(transient.initial.size()) + " entries");
     }
     if (transient.snapshots > 0) {
       values.fail("transient.snapshots.count", "0 with transient.model: reduced (it has no displacement field)",

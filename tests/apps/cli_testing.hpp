@@ -38,6 +38,22 @@ inline std::string cantilever(const std::string& cells, bool with_crack = true) 
   return text;
 }
 
+/// The cracked cantilever of cantilever("[10, 1, 2]") released from a static tip load of 50 N (the
+/// top crack pressed shut), no damping, crack.contact.model `contact`; modal with the lumped mass, the
+/// ring-down analysed (the pluck tests of the full and of the reduced transient).
+inline std::string cracked_release(const std::string& contact) {
+  return cantilever("[10, 1, 2]") + "  contact: {model: " + contact + "}\n" + R"(modal: {modes: 2, mass: lumped}
+transient:
+  release:
+    static: {face: x+, direction: z, amplitude: 50.0}
+  duration: 0.15
+  progress: false
+  probes:
+    - {name: tip, point: [0.2, 0.01, 0.01]}
+spectrum: {harmonics: 3, subharmonics: false, ringdown: {window_periods: 2}}
+)";
+}
+
 /// A scene of the repository's data/ folder.
 inline std::string data(const std::string& name) { return std::string(CRACKLE_SOURCE_DIR) + "/data/" + name; }
 

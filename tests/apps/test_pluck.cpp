@@ -156,23 +156,7 @@ transient:
   EXPECT_NEAR(tip[0], beam, 0.01 * beam) << "tip " << tip[0] << " m, beam theory " << beam << " m";
 }
 
-namespace {
-
-/// The cracked beam released from a static tip load of 50 N, no damping; modal with the lumped mass.
-std::string cracked_release(const std::string& contact) {
-  return std::string(kBeam) + kCrack + "  contact: {model: " + contact + "}\n" + R"(modal: {modes: 2, mass: lumped}
-transient:
-  release:
-    static: {face: x+, direction: z, amplitude: 50.0}
-  duration: 0.15
-  progress: false
-  probes:
-    - {name: tip, point: [0.2, 0.01, 0.01]}
-spectrum: {harmonics: 3, subharmonics: false, ringdown: {window_periods: 2}}
-)";
-}
-
-}  // namespace
+using cli_testing::cracked_release;
 
 // The breathing crack: a bilinear oscillator rings at 2 f_u f_o / (f_u + f_o) and carries
 // harmonics; without contact, the open body rings at its open frequency.

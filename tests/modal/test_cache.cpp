@@ -31,3 +31,33 @@ TEST(ModalCache, SecondRunReadsTheUncrackedSolveAndAgreesExactly) {
   EXPECT_NE(other.variants[0].modes.frequencies_hz[0], first.variants[0].modes.frequencies_hz[0]);
   fs::remove_all(cache);
 }
+
+// Both variants are cached by the fingerprint of their K and M: a second run of the same cracked
+// body reads both; a deeper crack changes the open K (solved again) but not the uncracked one (read).
+TEST(ModalCache, OpenVariantIsCachedUntilTheCrackChanges) {
+  const fs::path cache = fs::temp_directory_path() / ("crackle-modal-cache-open-" + std::to_string(::getpid()));
+  fs::remove_all(cache);
+  mesh::CrackSpec crack = modal::testing::edge_crack();
+  const auto solve = [&](const mesh::CrackSpec& spec) {
+    mesh::Mesh mesh = modal::testing::box_mesh(Vec3(1.0, 0.1, 0.2), {10, 1, 4}, 1, spec);
+    std::vector<fem::DirichletCondition> clamp = {modal::testing::fix(mesh, "x-", {0, 1, 2})};
+    ModalOptions options;
+    options.modes = 3;
+    options.variants = {mesh::Variant::uncracked, mesh::Variant::open};
+    options.cache_directory = cache;
+    return run_modal(mesh, modal::testing::steel(0.3), clamp, options);
+  };
+  const ModalResult first = solve(crack);
+  const ModalResult second = solve(crack);
+  EXPECT_FALSE(first.variants[1].modes.report.from_cache);
+  EXPECT_TRUE(second.variants[0].modes.report.from_cache);
+  EXPECT_TRUE(second.variants[1].modes.report.from_cache);
+  EXPECT_EQ(first.variants[1].modes.frequencies_hz, second.variants[1].modes.frequencies_hz);
+  EXPECT_EQ(first.pairs[0].f_bilinear_hz, second.pairs[0].f_bilinear_hz);
+  crack.region[kZ] = {0.0, 0.15};
+  const ModalResult deeper = solve(crack);
+  EXPECT_TRUE(deeper.variants[0].modes.report.from_cache);
+  EXPECT_FALSE(deeper.variants[1].modes.report.from_cache);
+  EXPECT_LT(deeper.variants[1].modes.frequencies_hz[0], first.variants[1].modes.frequencies_hz[0]);
+  fs::remove_all(cache);
+}
