@@ -39,15 +39,16 @@ COMMON = ["spectrum.plots=false", "transient.progress=false"]
 
 # --graded: the same signature by the reduced model, uniform (grading none) against graded (always).
 REDUCED = ["transient.model=reduced"]
+# Graded p = 4 at [40,4,2] (441 k DOFs) is left out: its modal stage holds K, M and their copies
+# (~18 GB) before the factor (crackle refuses it with a clear error once the factor is analysed).
+MESHES = ((2, (20, 2, 1)), (2, (40, 4, 2)), (3, (20, 2, 1)), (3, (40, 4, 2)), (4, (20, 2, 1)), (2, (80, 8, 4)))
 GRADED_POINTS = [
     (f"{'graded' if graded else 'uniform'} p{p} {'x'.join(map(str, cells))}",
      REDUCED + [f"mesh.box.grading={'always' if graded else 'none'}", f"mesh.box.order={p}",
                 f"mesh.box.cells=[{','.join(map(str, cells))}]"])
-    for graded in (False, True)
-    for p, cells in ((2, (20, 2, 1)), (2, (40, 4, 2)), (3, (20, 2, 1)), (3, (40, 4, 2)), (4, (20, 2, 1)),
-                     (2, (80, 8, 4)), (4, (40, 4, 2)))
-]
-GRADED_REFERENCE = "graded p4 40x4x2"
+    for graded in (False, True) for p, cells in MESHES
+] + [("uniform p4 40x4x2", REDUCED + ["mesh.box.grading=none", "mesh.box.order=4", "mesh.box.cells=[40,4,2]"])]
+GRADED_REFERENCE = "graded p4 20x2x1"
 
 
 def run_point(crackle, scene, outdir, label, overrides, reuse):

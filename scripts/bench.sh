@@ -123,6 +123,10 @@ if want spectrum; then
   sed "s#set output .*#set output 'docs/img/spectrum-work-precision.png'#" "$out/spectrum/spectrum_wp.gp" | gnuplot
   echo
   echo "Plot: docs/img/spectrum-work-precision.png"
+  echo
+  echo "### The same signature by the reduced model, uniform against graded meshes (issue 15)"
+  load
+  python3 bench/spectrum_wp.py "$crackle" "$out/spectrum-graded" --graded --budget 1800
 fi
 
 if want study; then
