@@ -35,6 +35,12 @@ double extended_merit(const HarmonicBalance& hb, const VectorX& y, double omega_
   return hb.residual(y[n] * omega_ref, y.head(n) * hb.gap_scale()).squaredNorm() + constraint * constraint;
 }
 
+/// The same numbers of unstable multipliers of each kind.
+bool same_counts(const Stability& a, const Stability& b) {
+  return a.unstable_positive == b.unstable_positive && a.unstable_negative == b.unstable_negative &&
+         a.unstable_complex == b.unstable_complex;
+}
+
 /// Unit tangent: null vector of the n x (n+1) Jacobian, oriented along `previous`.
 VectorX tangent(const MatrixX& jacobian, const VectorX& previous) {
   const Index n = jacobian.rows();
@@ -69,7 +75,8 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
     BranchPoint point;
     point.solution = std::move(sol);
     point.tangent_omega = tangent_omega;
-    if (options.stability) point.stability = hb.hill_stability(point.solution);
+    if (options.stability)
+      point.stability = options.hill_everywhere ? hb.hill_stability(point.solution) : hb.floquet_stability(point.solution);
     if (!branch.empty()) {
       const BranchPoint& last = branch.back();
       point.fold = (last.tangent_omega > 0.0) != (point.tangent_omega > 0.0);
@@ -79,6 +86,9 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
         point.period_doubling = a.unstable_negative != b.unstable_negative;
         point.stability_change = (a.unstable_positive + a.unstable_negative + a.unstable_complex) !=
                                  (b.unstable_positive + b.unstable_negative + b.unstable_complex);
+        if (!same_counts(a, b) && options.hill_at_events && !options.hill_everywhere)
+          point.hill_check = same_counts(hb.hill_stability(last.solution), a) &&
+                             same_counts(hb.hill_stability(point.solution), b);
       }
     }
     branch.push_back(std::move(point));
