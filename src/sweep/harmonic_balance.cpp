@@ -763,12 +763,29 @@ Stability HarmonicBalance::floquet_stability(const Solution& sol, double toleran
     monodromy = MatrixX((a * (runs[i].count * h)).exp()) * monodromy;
     half_step[i] = (a * (0.5 * h)).exp();
   }
-  Eigen::EigenSolver<MatrixX> eig(monodromy, true);
-  if (eig.info() != Eigen::Success)
-    throw SolverError("Floquet stability: the eigen-solve of the monodromy matrix failed at Omega = " + format_number(sol.omega));
+  // The eigen-solve on (q, q'/omega_r): velocities are omega_r times the displacements, and Eigen's real
+  // Schur form does not balance (unscaled, it failed to converge on a 10 x 10 monodromy of the cantilever).
+  VectorX scaling = VectorX::Ones(2 * m);
+  for (Index r = 0; r < m; ++r)
+    if (s.omega[r] > 0.0) scaling[m + r] = 1.0 / s.omega[r];
+  const MatrixX balanced = scaling.asDiagonal() * monodromy * scaling.cwiseInverse().asDiagonal();
+  ComplexVectorX multipliers;
+  ComplexMatrixX vectors;
+  Eigen::EigenSolver<MatrixX> real_eig(balanced, true);
+  if (real_eig.info() == Eigen::Success) {
+    multipliers = real_eig.eigenvalues();
+    vectors = real_eig.eigenvectors();
+  } else {  // the complex QR as a fallback
+    Eigen::ComplexEigenSolver<ComplexMatrixX> complex_eig(balanced.cast<Complex>(), true);
+    if (complex_eig.info() != Eigen::Success)
+      throw SolverError("Floquet stability: the eigen-solve of the monodromy matrix failed at Omega = " +
+                        format_number(sol.omega));
+    multipliers = complex_eig.eigenvalues();
+    vectors = complex_eig.eigenvectors();
+  }
   Stability st;
   st.exponents.resize(2 * m);
-  for (Index e = 0; e < 2 * m; ++e) st.exponents[e] = std::log(eig.eigenvalues()[e]) / period;
+  for (Index e = 0; e < 2 * m; ++e) st.exponents[e] = std::log(multipliers[e]) / period;
   classify(st, period, tolerance);
   if (2 * m == 0) return st;
   // critical mode in Hill's layout: s(t) = e^{-lambda t} q(t) sampled at t_j and its harmonics k = -H..H
@@ -776,7 +793,7 @@ Stability HarmonicBalance::floquet_stability(const Solution& sol, double toleran
   for (Index e = 1; e < 2 * m; ++e)
     if (st.exponents[e].real() > st.exponents[best].real()) best = e;
   const Complex lambda = st.exponents[best];
-  ComplexVectorX x = eig.eigenvectors().col(best);  // at t = -h/2
+  ComplexVectorX x = scaling.cwiseInverse().cast<Complex>().asDiagonal() * vectors.col(best);  // at t = -h/2
   ComplexMatrixX mode = ComplexMatrixX::Zero(m, 2 * H + 1);
   std::size_t run = 0;
   for (int j = 0; j < N; ++j) {
