@@ -1,6 +1,7 @@
 #pragma once
 /// \file Harmonic balance with alternating frequency/time (AFT) on the condensed reduced model
-/// (HYBRID.md §4), Newton with the analytic Jacobian, and Hill's stability (HYBRID.md §5).
+/// (HYBRID.md §4), Newton with the analytic Jacobian, and the stability (HYBRID.md §5) by the monodromy
+/// matrix of the linearisation (every point) and by Hill's method (its check).
 ///
 /// **Unknowns.** The pair-row gaps are periodic in \f$\tau = (\Omega/\nu)t\f$:
 /// \f$g(\tau) = G_0 + \sum_{k=1}^{H} (a_k \cos k\tau + b_k \sin k\tau)\f$. They are stored real, block by
@@ -25,7 +26,7 @@
 /// marched over two periods from a zero traction at \f$\tau_0\f$; the second period is kept (its
 /// history is that of the periodic orbit once the first period has slipped; in permanent stick
 /// the mean tangential force stays the one of that start). Its Jacobian is propagated exactly
-/// through the march. Hill's method is frictionless only (throws with friction).
+/// through the march. The stability is frictionless only (both methods throw with friction).
 #include <complex>
 #include <functional>
 #include <memory>
@@ -82,7 +83,7 @@ struct Solution {
   OrderRatios ratios(Index row) const;
 };
 
-/// Stability of a periodic solution by Hill's method.
+/// Stability of a periodic solution (Floquet exponents by the monodromy matrix or Hill's method).
 struct Stability {
   ComplexVectorX exponents;    ///< the 2m selected Floquet exponents lambda [1/s]
   ComplexVectorX multipliers;  ///< exp(lambda T), T = 2 pi nu / Omega
@@ -143,8 +144,8 @@ class HarmonicBalance {
   /// the massless boundary, HYBRID.md §5) from its monodromy matrix over one base period: the
   /// condensed stiffness is held piecewise constant around the N AFT samples of the orbit, so each run
   /// of samples with one active set propagates by one matrix exponential of size 2m. Exact for the
-  /// sampled orbit (no harmonic truncation) and about a thousand times cheaper than Hill's
-  /// eigen-solve at m = 3, H = 15; the exponents are log(rho)/T (Im in (-w0/2, w0/2]), the critical
+  /// sampled orbit (no harmonic truncation) and about a hundred times cheaper than Hill's
+  /// eigen-solve (~1.4 ms against ~0.12 s per point on the beam, m = 3, H = 15); the exponents are log(rho)/T (Im in (-w0/2, w0/2]), the critical
   /// mode in Hill's layout (harmonics of e^{-lambda t} q(t)). Same `tolerance` as hill_stability().
   Stability floquet_stability(const Solution& solution, double tolerance = 0.0) const;
 

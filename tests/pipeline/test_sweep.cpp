@@ -1,6 +1,8 @@
 // The sweep pipeline on reduced systems written by hand: the scene's sweep: section (defaults,
 // file:line errors), the linear sweep against the receptance, a bilinear oscillator's
-// super-harmonic resonance at f_b/2, harmonic balance against the stepped sine, and the files.
+// super-harmonic resonance at f_b/2, harmonic balance against the stepped sine, the stepped sine's
+// jumps at the folds of a clearance oscillator, the period-doubled branch against the stepped sine,
+// and the files.
 #include <gtest/gtest.h>
 
 #include <cmath>
