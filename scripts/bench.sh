@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs the benchmarks and prints Markdown tables for docs/benchmarks.md.
 # Usage: scripts/bench.sh [assembly|modal|modal-scale|transient|spectrum|study|reduced|reduced-scale|reduced-composite|sweep|all]   (default all)
-# (sweep: data/beam.yaml by harmonic balance (cold cache) and by stepped sine; cost per point vs H)
+# (sweep: data/beam.yaml by harmonic balance (cold cache), without stability and by stepped sine; cost and peaks vs H)
 # (reduced: data/beam.yaml full vs transient.model=reduced; FULL_DIR=dir reuses a full run's outputs)
 # (reduced-scale: bench_reduced, cost per step vs crack pairs (REDUCED_PAIRS, default 100..5000) and modes)
 # (reduced-composite: data/composite-plate.yaml full vs reduced, both cut to COMPOSITE_PERIODS periods (default 12))
@@ -234,16 +234,18 @@ if want sweep; then
   rm -rf "$cache"
   sw() { local name=$1; shift; /usr/bin/time -f "%e s wall, %U s user" "$crackle" sweep data/beam.yaml -o "$out/$name" -q --modal-cache "$cache" "$@" >/dev/null; echo "$out/$name"; }
   dirs=("$(sw sweep-hb)" "$(sw sweep-stepped --set sweep.method=stepped_sine --set sweep.points=50)")
-  for h in 5 10 25; do dirs+=("$(sw "sweep-h$h" --set sweep.harmonics=$h --set sweep.points=50)"); done
+  dirs+=("$(sw sweep-nostab --set sweep.stability=false)")
+  for h in 5 10 20 30 40; do dirs+=("$(sw "sweep-h$h" --set sweep.harmonics=$h --set sweep.points=50)"); done
   python3 - "${dirs[@]}" <<'PY'
 import json, sys
-print("| run | method | H | pairs | unknowns | points | modal s | reduction s | sweep s | s/point | wall s | A2/A1 peak [Hz] | vs f_b/2 |")
-print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+print("| run | method | H | pairs | unknowns | points | modal s | reduction s | sweep s | s/point | wall s | A2/A1 peak [Hz] | vs f_b/2 | A2/A1 | A3/A1 peak |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 for d in sys.argv[1:]:
     j = json.load(open(d + "/sweep.json")); st = {x["name"]: x["seconds"] for x in j["stages"]}
     p = next(iter(j["probes"].values()))["peak_a2_over_a1"]; fb = j["bilinear_hz"]
     print(f"| {d.split('/')[-1]} | {j['settings']['method']} | {j['settings']['harmonics']} | {j['model']['pairs']} | "
           f"{j['model']['unknowns']} | {j['points']} | {st['modal']:.1f} | {st['reduction']:.1f} | {st['sweep']:.1f} | "
-          f"{j['seconds_per_point']:.3f} | {j['wall_s']:.1f} | {p['frequency_hz']:.2f} | {p['frequency_hz'] / (fb / 2) - 1:+.2%} |")
+          f"{j['seconds_per_point']:.3f} | {j['wall_s']:.1f} | {p['frequency_hz']:.2f} | {p['frequency_hz'] / (fb / 2) - 1:+.2%} | "
+          f"{p['value']:.5f} | {next(iter(j['probes'].values()))['peak_a3_over_a1']['value']:.6f} |")
 PY
 fi

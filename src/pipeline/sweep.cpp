@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <complex>
+#include <functional>
 #include <limits>
 #include <optional>
 
@@ -44,29 +45,33 @@ void add_events(const sweep::BranchPoint& previous, const sweep::BranchPoint& po
                 std::vector<SweepEvent>& events) {
   const double fa = previous.solution.omega / kTwoPi, fb = point.solution.omega / kTwoPi;
   if (point.fold) {
-    events.push_back({"fold", zero_crossing(fa, previous.tangent_omega, fb, point.tangent_omega), index});
+    events.push_back({"fold", zero_crossing(fa, previous.tangent_omega, fb, point.tangent_omega), index, point.hill_check});
   }
   const double at = zero_crossing(fa, previous.stability.max_real_part, fb, point.stability.max_real_part);
-  if (point.period_doubling) events.push_back({"period_doubling", at, index});
+  if (point.period_doubling) events.push_back({"period_doubling", at, index, point.hill_check});
   if (previous.stability.unstable_complex != point.stability.unstable_complex) {
-    events.push_back({"neimark_sacker", at, index});
+    events.push_back({"neimark_sacker", at, index, point.hill_check});
   }
   if (point.stability_change && !point.fold && !point.period_doubling &&
       previous.stability.unstable_complex == point.stability.unstable_complex) {
-    events.push_back({"stability_change", at, index});
+    events.push_back({"stability_change", at, index, point.hill_check});
   }
 }
 
-/// The H-convergence and end-of-branch warnings of a finished harmonic-balance sweep.
-void add_branch_warnings(const SweepSettings& settings, const sweep::HarmonicBalance& hb, int flagged,
-                         double first_flagged_hz, SweepResult& result) {
-  if (flagged > 0) {
-    result.warnings.push_back(
-        "H = " + std::to_string(settings.section.harmonics) + ": the top harmonics hold up to " +
-        format_number(result.max_top_share) + " of the gap response (> " + format_number(hb.options().top_threshold) +
-        ") at " + std::to_string(flagged) + " of " + std::to_string(result.points.size()) + " points, first at " +
-        format_number(first_flagged_hz) + " Hz: raise sweep.harmonics");
-  }
+/// The H-convergence warning of a finished harmonic-balance sweep (first among the warnings).
+void add_harmonics_warning(const SweepSettings& settings, double threshold, int flagged, double first_flagged_hz,
+                           SweepResult& result) {
+  if (flagged == 0) return;
+  result.warnings.insert(
+      result.warnings.begin(),
+      "H = " + std::to_string(settings.section.harmonics) + ": the top harmonics hold up to " +
+          format_number(result.max_top_share) + " of the gap response (> " + format_number(threshold) + ") at " +
+          std::to_string(flagged) + " of " + std::to_string(result.points.size()) + " points, first at " +
+          format_number(first_flagged_hz) + " Hz: raise sweep.harmonics");
+}
+
+/// Whether the (first) branch reached the end of the range, with a warning when not.
+void add_completion(const SweepSettings& settings, SweepResult& result) {
   const double last_hz = result.points.empty() ? settings.from_hz : result.points.back().frequency_hz();
   const bool upward = settings.to_hz > settings.from_hz;
   result.completed = upward ? last_hz >= settings.to_hz : last_hz <= settings.to_hz;
@@ -153,9 +158,10 @@ SweepPoint stepped_sine_point(const reduced::ReducedSystem& system, const SweepS
   return point;
 }
 
-/// Amplitude and phase of order k / nu of a probe at a point.
-double amplitude_of(const SweepPoint& point, const SweepProbe& probe, int k) {
-  return point.solution.amplitude(probe.row, double(k) / point.solution.subharmonic);
+/// Amplitude of order k / nu of a probe at a point (nu the sweep's: a period-one point of a
+/// `subharmonic: 2` sweep has no odd k).
+double amplitude_of(const SweepPoint& point, const SweepProbe& probe, int k, int nu) {
+  return point.solution.amplitude(probe.row, double(k) / nu);
 }
 
 /// The frequency and value of the largest `value(point)`, refined by a parabola through the three
@@ -200,50 +206,170 @@ std::vector<SweepProbe> sweep_probes(const scene::Scene& scene) {
   return probes;
 }
 
-SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const SweepSettings& settings,
-                                   const SweepProgress& progress) {
-  const SingleThreadedEigen one_thread;
-  Stopwatch clock;
-  const scene::SweepSection& section = settings.section;
+namespace {
+
+/// Records continued points into a SweepResult: events against the previous point of the same
+/// segment, the H-convergence flags, progress.
+class BranchRecorder {
+ public:
+  BranchRecorder(const SweepSettings& settings, SweepResult& result, const SweepProgress& progress)
+      : settings_(settings), result_(result), progress_(progress) {}
+
+  /// Starts a new segment (no event against the last point of the previous one).
+  void start_segment() {
+    previous_.reset();
+    ++segment_;
+  }
+  /// Stop a segment when this returns false for a point (recorded first).
+  std::function<bool(const sweep::Solution&)> keep_going;
+
+  bool operator()(const sweep::BranchPoint& branch_point) {
+    SweepPoint point;
+    point.solution = branch_point.solution;
+    point.stability_known = settings_.section.stability;
+    point.stable = !settings_.section.stability || branch_point.stability.stable;
+    point.fold = branch_point.fold;
+    point.period_doubling = branch_point.period_doubling;
+    point.segment = segment_;
+    if (previous_) add_events(*previous_, branch_point, result_.points.size(), result_.events);
+    result_.max_top_share = std::max(result_.max_top_share, point.solution.top_harmonic_share);
+    if (point.solution.harmonics_flagged && flagged_++ == 0) first_flagged_hz_ = point.frequency_hz();
+    result_.points.push_back(std::move(point));
+    previous_ = branch_point;
+    previous_->solution = sweep::Solution();  // only omega, the tangent and the stability counts are needed
+    previous_->solution.omega = branch_point.solution.omega;
+    if (progress_) {
+      progress_(result_, (result_.points.back().frequency_hz() - settings_.from_hz) / (settings_.to_hz - settings_.from_hz));
+    }
+    return keep_going ? keep_going(branch_point.solution) : true;
+  }
+
+  int flagged() const { return flagged_; }
+  double first_flagged_hz() const { return first_flagged_hz_; }
+
+ private:
+  const SweepSettings& settings_;
+  SweepResult& result_;
+  const SweepProgress& progress_;
+  std::optional<sweep::BranchPoint> previous_;
+  int segment_ = 0;
+  int flagged_ = 0;
+  double first_flagged_hz_ = 0.0;
+};
+
+/// Share of the odd harmonics of Omega/2 in the gap response of a nu = 2 solution (0: period one).
+double period_two_share(const sweep::Solution& solution, Index rows) {
+  const Index components = solution.gaps.size() / rows;
+  double odd = 0.0, total = 0.0;
+  for (Index component = 1; component < components; ++component) {
+    const double part = solution.gaps.segment(component * rows, rows).squaredNorm();
+    total += part;
+    if (((component + 1) / 2) % 2 == 1) odd += part;  // components 2k-1, 2k hold harmonic k
+  }
+  return total > 0.0 ? std::sqrt(odd / total) : 0.0;
+}
+
+constexpr double kJoinedShare = 1e-3;  ///< a nu = 2 point below this share has rejoined the period-one branch
+
+/// The solver options of a sweep with `harmonics` of the base frequency Omega / nu.
+sweep::HarmonicBalanceOptions balance_options(const reduced::ReducedSystem& system, int harmonics, int nu) {
   sweep::HarmonicBalanceOptions options;
-  options.harmonics = section.harmonics;
-  options.subharmonic = section.subharmonic;
+  options.harmonics = harmonics;
+  options.subharmonic = nu;
   // The arclength runs in (G / s, Omega / Omega_from): with s the static gap response the many gap
   // harmonics dominate it near a super-harmonic resonance and the frequency creeps (thousands of
   // points). A larger s makes the step mostly frequency (the Newton tolerance is on r / s).
   options.gap_scale = kGapScaleFactor * sweep::HarmonicBalance(system, options).gap_scale();
-  const sweep::HarmonicBalance hb(system, options);
+  return options;
+}
+
+sweep::ContinuationOptions continuation_options(const SweepSettings& settings) {
+  const scene::SweepSection& section = settings.section;
   sweep::ContinuationOptions continuation;
   continuation.stability = section.stability;
   continuation.max_step = std::abs(settings.to_hz - settings.from_hz) / settings.from_hz / section.points;
   continuation.initial_step = continuation.max_step;
   continuation.min_step = std::min(continuation.min_step, 1e-3 * continuation.max_step);
   continuation.max_points = 50 * section.points;
-  SweepResult result;
-  int flagged = 0;
-  double first_flagged_hz = 0.0;
-  std::optional<sweep::BranchPoint> previous;
-  const auto on_point = [&](const sweep::BranchPoint& branch_point) {
-    SweepPoint point;
-    point.solution = branch_point.solution;
-    point.stability_known = section.stability;
-    point.stable = !section.stability || branch_point.stability.stable;
-    point.fold = branch_point.fold;
-    point.period_doubling = branch_point.period_doubling;
-    if (previous) add_events(*previous, branch_point, result.points.size(), result.events);
-    result.max_top_share = std::max(result.max_top_share, point.solution.top_harmonic_share);
-    if (point.solution.harmonics_flagged && flagged++ == 0) first_flagged_hz = point.frequency_hz();
-    result.points.push_back(std::move(point));
-    previous = branch_point;
-    previous->solution = sweep::Solution();  // only omega, the tangent and the stability counts are needed
-    previous->solution.omega = branch_point.solution.omega;
-    if (progress) {
-      progress(result, (result.points.back().frequency_hz() - settings.from_hz) / (settings.to_hz - settings.from_hz));
+  return continuation;
+}
+
+/// The nu = 2 solution near the most unstable period-one point of the first period-doubling region
+/// of `branch` (points `first` ..), from the critical Floquet mode at a few amplitudes; none if no
+/// guess converges to a solution with a period-two share.
+std::optional<sweep::Solution> period_two_start(const reduced::ReducedSystem& system, const sweep::HarmonicBalance& one,
+                                                const sweep::HarmonicBalance& two,
+                                                const std::vector<sweep::BranchPoint>& branch) {
+  std::size_t best = branch.size();
+  for (std::size_t i = 0; i < branch.size(); ++i) {
+    if (branch[i].stability.unstable_negative == 0) {
+      if (best < branch.size()) break;  // the end of the first region
+      continue;
     }
-    return true;
+    if (best == branch.size() || branch[i].stability.max_real_part > branch[best].stability.max_real_part) best = i;
+  }
+  if (best == branch.size()) return std::nullopt;
+  const sweep::Solution& period_one = branch[best].solution;
+  const sweep::Stability stability = one.floquet_stability(period_one);
+  const double size = period_one.gaps.cwiseAbs().maxCoeff();
+  for (double amplitude : {1.0, 0.5, 2.0, 0.25, 4.0}) {
+    const VectorX guess =
+        sweep::period_doubled_guess(system, period_one, stability, two.n_harmonics(), amplitude * size);
+    try {
+      sweep::Solution solution = two.solve(period_one.omega, guess);
+      if (period_two_share(solution, system.n_rows()) > 10.0 * kJoinedShare) return solution;
+    } catch (const SolverError&) {
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const SweepSettings& settings,
+                                   const SweepProgress& progress) {
+  const SingleThreadedEigen one_thread;
+  Stopwatch clock;
+  const scene::SweepSection& section = settings.section;
+  const double from = kTwoPi * settings.from_hz, to = kTwoPi * settings.to_hz;
+  const sweep::ContinuationOptions continuation = continuation_options(settings);
+  const bool switch_branch = section.subharmonic == 2 && section.stability;
+  // subharmonic 2: the period-one branch first (H/2 harmonics of Omega, the same orders), then the
+  // period-two branch from its first period doubling, both ways until it rejoins the period-one branch
+  const sweep::HarmonicBalance hb(
+      system, balance_options(system, switch_branch ? std::max(1, section.harmonics / 2) : section.harmonics,
+                              switch_branch ? 1 : section.subharmonic));
+  SweepResult result;
+  BranchRecorder recorder(settings, result, progress);
+  std::vector<sweep::BranchPoint> period_one;
+  const auto record = [&](const sweep::BranchPoint& point) {
+    if (switch_branch) period_one.push_back(point);
+    return recorder(point);
   };
-  sweep::continue_branch(hb, kTwoPi * settings.from_hz, kTwoPi * settings.to_hz, continuation, on_point);
-  add_branch_warnings(settings, hb, flagged, first_flagged_hz, result);
+  sweep::continue_branch(hb, from, to, continuation, record);
+  add_completion(settings, result);
+  if (section.subharmonic == 2 && !section.stability) {
+    result.warnings.push_back("subharmonic 2 without stability: no period doubling can be found, so the branch is the "
+                              "period-one response (A1/2 = 0); set sweep.stability: true (frictionless contact)");
+  }
+  if (switch_branch) {
+    const sweep::HarmonicBalance two(system, balance_options(system, section.harmonics, 2));
+    const std::optional<sweep::Solution> start = period_two_start(system, hb, two, period_one);
+    period_one.clear();
+    if (!start) {
+      result.warnings.push_back("subharmonic 2: no period doubling of the period-one branch in the range (or no "
+                                "period-two solution found from it): no period-two branch");
+    } else {
+      recorder.keep_going = [&](const sweep::Solution& solution) {
+        return period_two_share(solution, system.n_rows()) > kJoinedShare;
+      };
+      for (const double end : {from, to}) {
+        recorder.start_segment();
+        sweep::continue_branch(two, start->omega, end, continuation, std::ref(recorder), &*start);
+      }
+    }
+  }
+  add_harmonics_warning(settings, hb.options().top_threshold, recorder.flagged(), recorder.first_flagged_hz(), result);
   result.solve_s = clock.seconds();
   return result;
 }
@@ -288,7 +414,7 @@ io::CsvTable sweep_table(const SweepResult& result, const SweepSettings& setting
     const std::string prefix = probe.name + " u_" + axis_name(probe.component) + " ";
     for (int k = 0; k <= harmonics; ++k) {
       const std::string order = order_label(k, nu);
-      table.add(prefix + "A" + order + " [m]", column([&](const SweepPoint& p) { return amplitude_of(p, probe, k); }));
+      table.add(prefix + "A" + order + " [m]", column([&](const SweepPoint& p) { return amplitude_of(p, probe, k, nu); }));
       table.add(prefix + "phase" + order + " [rad]",
                 column([&](const SweepPoint& p) { return p.solution.phase(probe.row, double(k) / nu); }));
     }
@@ -303,6 +429,7 @@ io::CsvTable sweep_table(const SweepResult& result, const SweepSettings& setting
   table.add("top harmonic share [-]", column([](const SweepPoint& p) { return p.solution.top_harmonic_share; }));
   table.add("direction [1 up, -1 down]", column([](const SweepPoint& p) { return double(p.direction); }));
   table.add("periods [-]", column([](const SweepPoint& p) { return double(p.periods); }));
+  table.add("branch period [excitation periods]", column([](const SweepPoint& p) { return double(p.solution.subharmonic); }));
   return table;
 }
 
@@ -311,6 +438,8 @@ nlohmann::json sweep_json(const SweepResult& result, const SweepSettings& settin
   nlohmann::json document = {
       {"settings", {{"from_hz", settings.from_hz}, {"to_hz", settings.to_hz}, {"harmonics", section.harmonics},
                     {"subharmonic", section.subharmonic}, {"method", section.method}, {"stability", section.stability},
+                    {"stability_method", "Floquet multipliers from the monodromy matrix at every point; Hill's method "
+                                         "at the two points around each stability change (hill_agrees)"},
                     {"points", section.points}, {"tolerance", section.tolerance}, {"max_periods", section.max_periods}}},
       {"bilinear_hz", settings.bilinear_hz > 0.0 ? nlohmann::json(settings.bilinear_hz) : nlohmann::json(nullptr)},
       {"points", result.points.size()}, {"completed", result.completed}, {"max_top_share", result.max_top_share},
@@ -321,6 +450,7 @@ nlohmann::json sweep_json(const SweepResult& result, const SweepSettings& settin
   for (const SweepEvent& event : result.events) {
     nlohmann::json entry = {{"kind", event.kind}, {"frequency_hz", event.frequency_hz}, {"point", event.point}};
     if (settings.bilinear_hz > 0.0) entry["ratio_to_bilinear"] = event.frequency_hz / settings.bilinear_hz;
+    if (event.hill_check >= 0) entry["hill_agrees"] = event.hill_check == 1;
     events.push_back(entry);
   }
   document["events"] = events;
@@ -350,20 +480,21 @@ spectral::PlotResult plot_sweep(const std::filesystem::path& png, const SweepRes
   std::vector<int> orders = {nu, 2 * nu, 3 * nu};  // A1, A2, A3 as k of the base frequency
   if (nu == 2) orders.push_back(1);
   double largest = 0.0;
-  for (const SweepPoint& point : result.points) largest = std::max(largest, amplitude_of(point, probe, nu));
+  for (const SweepPoint& point : result.points) largest = std::max(largest, amplitude_of(point, probe, nu, nu));
   const double floor = largest > 0.0 ? 1e-12 * largest : 1e-300;
   // Stable runs in data block 0, unstable runs in block 1, each run carried on to the next one's first point.
   std::string blocks[2];
   const auto row = [&](const SweepPoint& point) {
     std::string line = number_text(point.frequency_hz());
-    for (int k : orders) line += " " + number_text(std::max(amplitude_of(point, probe, k), floor));
+    for (int k : orders) line += " " + number_text(std::max(amplitude_of(point, probe, k, nu), floor));
     return line + "\n";
   };
   int current = 0;
   for (std::size_t i = 0; i < result.points.size(); ++i) {
     const SweepPoint& point = result.points[i];
     const int kind = point.stable ? 0 : 1;
-    const bool turned = i > 0 && point.direction != result.points[i - 1].direction;
+    const bool turned = i > 0 && (point.direction != result.points[i - 1].direction ||
+                                  point.segment != result.points[i - 1].segment);
     if (i > 0 && (kind != current || turned)) {
       if (!turned) blocks[current] += row(point);  // the run goes on to where the next one starts
       blocks[current] += "\n";

@@ -48,12 +48,13 @@ std::vector<SweepProbe> sweep_probes(const scene::Scene& scene);
 /// One solution point.
 struct SweepPoint {
   sweep::Solution solution;     ///< omega, subharmonic, outputs (probe rows only), iterations, residual
-  bool stability_known = false; ///< Hill's method ran
+  bool stability_known = false; ///< the stability was computed (Floquet multipliers)
   bool stable = true;
   bool fold = false;            ///< a fold lies between the previous point and this one
   bool period_doubling = false; ///< a multiplier crossed -1 there
   int direction = 1;            ///< stepped_sine: +1 up, -1 down; harmonic_balance: +1
   int periods = 0;              ///< stepped_sine: periods run to steady state
+  int segment = 0;              ///< harmonic_balance: 0 the first branch; 1, 2 the period-two branch down, up
   double frequency_hz() const;
 };
 
@@ -62,6 +63,9 @@ struct SweepEvent {
   std::string kind;        ///< fold, period_doubling, neimark_sacker, stability_change
   double frequency_hz = 0.0;  ///< interpolated between the two points around it
   std::size_t point = 0;   ///< index of the point after it
+  /// Where the unstable counts change: 1 when Hill's method finds the monodromy's counts at both
+  /// points around it, 0 when not; -1 not checked (sweep.json `hill_agrees`).
+  int hill_check = -1;
 };
 
 struct SweepResult {
@@ -77,6 +81,11 @@ struct SweepResult {
 using SweepProgress = std::function<void(const SweepResult&, double fraction)>;
 
 /// Harmonic-balance sweep: continuation from from_hz to to_hz (started from the linear solution).
+/// With `subharmonic: 2` (and stability): the period-one branch (H/2 harmonics of the excitation, the
+/// same orders), then from the most unstable point of its first period-doubling region the period-two
+/// branch (nu = 2, H harmonics of half the excitation; started from the critical Floquet mode)
+/// continued down and up until it rejoins the period-one branch (its A1/2 share of the gaps < 1e-3) or
+/// leaves the range. `completed` refers to the period-one branch.
 SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const SweepSettings& settings,
                                    const SweepProgress& progress = SweepProgress());
 

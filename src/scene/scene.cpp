@@ -318,13 +318,16 @@ Param build_parameters() {
       }).required(),
       integer("harmonics", "H: harmonic orders 0..H of the base frequency (excitation / subharmonic).")
           .at_least(1).at_most(200).defaults_to("15"),
-      integer("subharmonic", "1, or 2 for period-doubled branches (base frequency = excitation / 2).")
+      integer("subharmonic", "1, or 2 for period-doubled branches (base frequency = excitation / 2): the "
+                             "period-one branch, then the period-two branch from its first period doubling "
+                             "(harmonic_balance needs stability for it).")
           .at_least(1).at_most(2).defaults_to("1"),
       choice("method", "harmonic_balance: pseudo-arclength continuation of the periodic solutions (through "
                        "folds); stepped_sine: the reduced transient run to steady state at each frequency, up "
                        "then down, as a lab does.", {"harmonic_balance", "stepped_sine"})
           .defaults_to("harmonic_balance"),
-      boolean("stability", "Hill's method at every point (harmonic_balance; frictionless contact only).")
+      boolean("stability", "Floquet multipliers at every point (monodromy matrix), Hill's method around each "
+                           "stability change (harmonic_balance; frictionless contact only).")
           .defaults_to("true without friction, else false", [](const Values& values, const std::string&) {
             const bool friction = values.has("crack.contact.friction") && values.number("crack.contact.friction") > 0;
             return std::string(friction ? "false" : "true");

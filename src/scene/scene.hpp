@@ -186,7 +186,7 @@ struct SweepSection {
   int harmonics = 15;              ///< H: orders 0..H of the base frequency
   int subharmonic = 1;             ///< nu: 1, or 2 for period-doubled branches
   std::string method = "harmonic_balance";  ///< harmonic_balance | stepped_sine
-  bool stability = true;           ///< Hill's method at every point (harmonic_balance)
+  bool stability = true;           ///< Floquet multipliers at every point, Hill around changes (harmonic_balance)
   int points = 200;                ///< at least this many points (harmonic_balance), or frequencies each way (stepped_sine)
   double tolerance = 1e-6;         ///< stepped_sine: steady when no harmonic changes more than this x A1 over a period
   int max_periods = 2000;          ///< stepped_sine: periods per frequency at most

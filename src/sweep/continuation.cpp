@@ -35,6 +35,12 @@ double extended_merit(const HarmonicBalance& hb, const VectorX& y, double omega_
   return hb.residual(y[n] * omega_ref, y.head(n) * hb.gap_scale()).squaredNorm() + constraint * constraint;
 }
 
+/// The same numbers of unstable multipliers of each kind.
+bool same_counts(const Stability& a, const Stability& b) {
+  return a.unstable_positive == b.unstable_positive && a.unstable_negative == b.unstable_negative &&
+         a.unstable_complex == b.unstable_complex;
+}
+
 /// Unit tangent: null vector of the n x (n+1) Jacobian, oriented along `previous`.
 VectorX tangent(const MatrixX& jacobian, const VectorX& previous) {
   const Index n = jacobian.rows();
@@ -69,7 +75,8 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
     BranchPoint point;
     point.solution = std::move(sol);
     point.tangent_omega = tangent_omega;
-    if (options.stability) point.stability = hb.hill_stability(point.solution);
+    if (options.stability)
+      point.stability = options.hill_everywhere ? hb.hill_stability(point.solution) : hb.floquet_stability(point.solution);
     if (!branch.empty()) {
       const BranchPoint& last = branch.back();
       point.fold = (last.tangent_omega > 0.0) != (point.tangent_omega > 0.0);
@@ -79,6 +86,9 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
         point.period_doubling = a.unstable_negative != b.unstable_negative;
         point.stability_change = (a.unstable_positive + a.unstable_negative + a.unstable_complex) !=
                                  (b.unstable_positive + b.unstable_negative + b.unstable_complex);
+        if (!same_counts(a, b) && options.hill_at_events && !options.hill_everywhere)
+          point.hill_check = same_counts(hb.hill_stability(last.solution), a) &&
+                             same_counts(hb.hill_stability(point.solution), b);
       }
     }
     branch.push_back(std::move(point));
@@ -101,6 +111,8 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
     bool accepted = false;
     VectorX y_new;
     int iterations = 0;
+    double residual = 0.0;
+    Eigen::PartialPivLU<MatrixX> bordered;  // [dr/dy; t^T] of the last corrector iteration
     while (!accepted) {
       y_new = y + ds * t;
       for (iterations = 1; iterations <= max_corrector; ++iterations) {
@@ -111,7 +123,8 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
         VectorX rhs(n + 1);
         rhs.head(n) = -c.residual;
         rhs[n] = -(t.dot(y_new - y) - ds);
-        const VectorX delta = a.partialPivLu().solve(rhs);
+        bordered.compute(a);
+        const VectorX delta = bordered.solve(rhs);
         // full steps first, then backtracking on the extended residual: piecewise-linear contact can
         // make plain Newton cycle between two active-sample patterns near a kink
         const double merit = rhs.squaredNorm();
@@ -125,8 +138,8 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
         }
         y_new = trial;
         if (!y_new.allFinite()) break;
-        const double res = hb.residual(y_new[n] * omega_ref, y_new.head(n) * hb.gap_scale()).lpNorm<Eigen::Infinity>();
-        if (res <= tolerance && delta.lpNorm<Eigen::Infinity>() <= 1e3 * tolerance + 1e-8) {
+        residual = hb.residual(y_new[n] * omega_ref, y_new.head(n) * hb.gap_scale()).lpNorm<Eigen::Infinity>();
+        if (residual <= tolerance && delta.lpNorm<Eigen::Infinity>() <= 1e3 * tolerance + 1e-8) {
           accepted = true;
           break;
         }
@@ -136,15 +149,19 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
         if (ds < options.min_step) return branch;  // cannot go on: the branch so far
       }
     }
-    e = evaluate(hb, y_new, omega_ref);
-    const VectorX t_new = tangent(e.jacobian, t);
+    // The new tangent from the last corrector matrix: its Jacobian is that of a point within the
+    // corrector's last step (<= 1e3 tolerance) of y_new, its last row the tangent it is oriented along
+    // (the same bordered system tangent() solves; one factorisation per point saved).
+    VectorX t_new = bordered.solve(VectorX::Unit(n + 1, n));
+    t_new.normalize();
+    if (t_new.dot(t) < 0.0) t_new = -t_new;
     y = y_new;
     t = t_new;
     Solution sol;
     sol.omega = y[n] * omega_ref;
     sol.gaps = y.head(n) * hb.gap_scale();
     sol.iterations = iterations;
-    sol.residual = e.residual.lpNorm<Eigen::Infinity>();
+    sol.residual = residual;
     sol.converged = true;
     hb.complete(sol);
     if (!add_point(std::move(sol), t[n])) return branch;

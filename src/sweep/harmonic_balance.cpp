@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
+#include <unsupported/Eigen/MatrixFunctions>
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -384,7 +385,85 @@ struct HarmonicBalance::Impl {
     }
     return it;
   }
+
+  /// A run of consecutive samples j = first .. first + count - 1 with one contact active set, and its
+  /// contact stiffness condensed through the massless boundary in modal coordinates (m x m):
+  /// K_c = (B Phi)_a^T (K_a^{-1} + R_aa)^{-1} (B Phi)_a, a the closed rows (zero when none is closed).
+  struct StiffnessRun {
+    int first = 0;
+    int count = 0;
+    MatrixX stiffness;
+  };
+
+  /// The runs of the frictionless linearised contact along a solution's samples (they cover 0..N-1).
+  std::vector<StiffnessRun> condensed_stiffness(const Solution& sol) const {
+    const MatrixX gaps = to_time(sol.gaps);
+    std::vector<StiffnessRun> runs;
+    std::vector<Index> previous_active;
+    for (int j = 0; j < N; ++j) {
+      std::vector<Index> active;
+      for (Index i = 0; i < c; ++i)
+        if (gaps(i, j) < 0.0 && stiffness[i] > 0.0) active.push_back(i);
+      if (!runs.empty() && active == previous_active) {  // consecutive samples mostly share the active set
+        ++runs.back().count;
+        continue;
+      }
+      const Index na = static_cast<Index>(active.size());
+      MatrixX flex(na, na);
+      MatrixX bphi(na, m);
+      for (Index a = 0; a < na; ++a) {
+        for (Index b = 0; b < na; ++b) flex(a, b) = system.residual(active[a], active[b]);
+        flex(a, a) += 1.0 / stiffness[active[a]];
+        bphi.row(a) = system.pair_modes.row(active[a]);
+      }
+      runs.push_back({j, 1, na > 0 ? MatrixX(bphi.transpose() * flex.ldlt().solve(bphi)) : MatrixX::Zero(m, m)});
+      previous_active = std::move(active);
+    }
+    return runs;
+  }
+
+  /// Default tolerance on Re lambda: 1e-6 times the lowest nonzero modal frequency (w0 without one).
+  double stability_tolerance(double w0) const {
+    double wmin = 0.0;
+    for (Index r = 0; r < m; ++r)
+      if (system.omega[r] > 0.0 && (wmin == 0.0 || system.omega[r] < wmin)) wmin = system.omega[r];
+    return 1e-6 * (wmin > 0.0 ? wmin : w0);
+  }
+
+  void require_frictionless(const char* method) const {
+    if (rows_per_pair == 3)
+      throw InputError(std::string(method) + " with friction is not implemented: the return mapping's history is not a "
+                       "periodic stiffness (run the continuation with stability off)");
+  }
 };
+
+namespace {
+
+/// Fills the multipliers, the counts of unstable ones by kind and the critical exponent of `st`
+/// from its exponents (period T = 2 pi / w0 of the base frequency).
+void classify(Stability& st, double period, double tolerance) {
+  const Index count = st.exponents.size();
+  st.multipliers.resize(count);
+  st.max_real_part = -1e300;
+  Index best = 0;
+  for (Index e = 0; e < count; ++e) {
+    const std::complex<double> lambda = st.exponents[e];
+    st.multipliers[e] = std::exp(lambda * period);
+    st.max_real_part = std::max(st.max_real_part, lambda.real());
+    if (lambda.real() > st.exponents[best].real()) best = e;
+    if (lambda.real() > tolerance) {
+      const double angle = std::arg(st.multipliers[e]);
+      if (std::abs(angle) < 1e-4)
+        ++st.unstable_positive;
+      else
+        (kPi - std::abs(angle) < 1e-4 ? st.unstable_negative : st.unstable_complex) += 1;
+    }
+  }
+  st.stable = st.max_real_part <= tolerance;
+  if (count > 0) st.critical_exponent = st.exponents[best];
+}
+
+}  // namespace
 
 // ---------------------------------------------------------------------------------------------
 
@@ -566,41 +645,12 @@ Stability HarmonicBalance::hill_stability(const Solution& sol, double tolerance)
   const int H = d.H;
   const int N = d.N;
   const double w0 = sol.omega / d.nu;
-  if (d.rows_per_pair == 3)
-    throw InputError("Hill's method with friction is not implemented: the return mapping's history is not a "
-                     "periodic stiffness (run the continuation with stability off)");
-  if (tolerance <= 0.0) {
-    double wmin = 0.0;
-    for (Index r = 0; r < m; ++r)
-      if (s.omega[r] > 0.0 && (wmin == 0.0 || s.omega[r] < wmin)) wmin = s.omega[r];
-    tolerance = 1e-6 * (wmin > 0.0 ? wmin : w0);
-  }
+  d.require_frictionless("Hill's method");
+  if (tolerance <= 0.0) tolerance = d.stability_tolerance(w0);
   // contact stiffness condensed through the massless boundary, in modal coordinates, per sample
-  const MatrixX gaps = d.to_time(sol.gaps);
-  std::vector<MatrixX> stiff(N, MatrixX::Zero(m, m));
-  std::vector<Index> previous_active;
-  MatrixX previous_stiffness = MatrixX::Zero(m, m);
-  for (int j = 0; j < N; ++j) {
-    std::vector<Index> active;
-    for (Index i = 0; i < d.c; ++i)
-      if (gaps(i, j) < 0.0 && d.stiffness[i] > 0.0) active.push_back(i);
-    if (active.empty()) continue;
-    if (active == previous_active) {  // consecutive samples mostly share the active set
-      stiff[j] = previous_stiffness;
-      continue;
-    }
-    const Index na = static_cast<Index>(active.size());
-    MatrixX flex(na, na);
-    MatrixX bphi(na, m);
-    for (Index a = 0; a < na; ++a) {
-      for (Index b = 0; b < na; ++b) flex(a, b) = s.residual(active[a], active[b]);
-      flex(a, a) += 1.0 / d.stiffness[active[a]];
-      bphi.row(a) = s.pair_modes.row(active[a]);
-    }
-    stiff[j] = bphi.transpose() * flex.ldlt().solve(bphi);
-    previous_active = active;
-    previous_stiffness = stiff[j];
-  }
+  std::vector<MatrixX> stiff(N);
+  for (const auto& run : d.condensed_stiffness(sol))
+    for (int j = run.first; j < run.first + run.count; ++j) stiff[j] = run.stiffness;
   // Fourier coefficients K_j = (1/N) sum_n K(tau_n) e^{-i j tau_n}, j = 0..2H, one r2c per entry
   std::vector<ComplexMatrixX> khat(2 * H + 1, ComplexMatrixX::Zero(m, m));
   {
@@ -672,33 +722,89 @@ Stability HarmonicBalance::hill_stability(const Solution& sol, double tolerance)
   }
   const Index count = static_cast<Index>(chosen.size());
   st.exponents.resize(count);
-  st.multipliers.resize(count);
-  const double period = 2.0 * kPi / w0;
-  st.max_real_part = -1e300;
-  for (Index e = 0; e < count; ++e) {
-    st.exponents[e] = chosen[e];
-    st.multipliers[e] = std::exp(chosen[e] * period);
-    st.max_real_part = std::max(st.max_real_part, chosen[e].real());
-    if (chosen[e].real() > tolerance) {
-      const double angle = std::arg(st.multipliers[e]);
-      if (std::abs(angle) < 1e-4)
-        ++st.unstable_positive;
-      else if (kPi - std::abs(angle) < 1e-4)
-        ++st.unstable_negative;
-      else
-        ++st.unstable_complex;
-    }
-  }
-  st.stable = st.max_real_part <= tolerance;
+  for (Index e = 0; e < count; ++e) st.exponents[e] = chosen[e];
+  classify(st, 2.0 * kPi / w0, tolerance);
   if (count > 0) {
     Index best = 0;
     for (Index e = 1; e < count; ++e)
       if (chosen[e].real() > chosen[best].real()) best = e;
-    st.critical_exponent = chosen[best];
     const auto v = eig.eigenvectors().col(chosen_index[best]).head(size);
     st.critical_mode.resize(m, 2 * H + 1);
     for (int k = -H; k <= H; ++k) st.critical_mode.col(k + H) = v.segment((k + H) * m, m);
   }
+  return st;
+}
+
+Stability HarmonicBalance::floquet_stability(const Solution& sol, double tolerance) const {
+  const Impl& d = *impl_;
+  const reduced::ReducedSystem& s = d.system;
+  const Index m = d.m;
+  const int H = d.H;
+  const int N = d.N;
+  const double w0 = sol.omega / d.nu;
+  const double period = 2.0 * kPi / w0;
+  const double h = period / N;
+  d.require_frictionless("Floquet stability");
+  if (tolerance <= 0.0) tolerance = d.stability_tolerance(w0);
+  // x = (q, q'), x' = A(t) x with A = [0 I; -(Omega_r^2 + K_c(t)) -2 zeta_r omega_r], K_c held over
+  // [t_j - h/2, t_j + h/2) around each sample: the propagator of a run of equal samples is one exponential
+  MatrixX base = MatrixX::Zero(2 * m, 2 * m);
+  base.topRightCorner(m, m).setIdentity();
+  for (Index r = 0; r < m; ++r) {
+    base(m + r, r) = -s.omega[r] * s.omega[r];
+    base(m + r, m + r) = -2.0 * s.damping_ratio(r) * s.omega[r];
+  }
+  const auto runs = d.condensed_stiffness(sol);
+  std::vector<MatrixX> half_step(runs.size());  // exp(A h / 2) per run, for the critical mode
+  MatrixX monodromy = MatrixX::Identity(2 * m, 2 * m);
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    MatrixX a = base;
+    a.bottomLeftCorner(m, m) -= runs[i].stiffness;
+    monodromy = MatrixX((a * (runs[i].count * h)).exp()) * monodromy;
+    half_step[i] = (a * (0.5 * h)).exp();
+  }
+  // The eigen-solve on (q, q'/omega_r): velocities are omega_r times the displacements, and Eigen's real
+  // Schur form does not balance (unscaled, it failed to converge on a 10 x 10 monodromy of the cantilever).
+  VectorX scaling = VectorX::Ones(2 * m);
+  for (Index r = 0; r < m; ++r)
+    if (s.omega[r] > 0.0) scaling[m + r] = 1.0 / s.omega[r];
+  const MatrixX balanced = scaling.asDiagonal() * monodromy * scaling.cwiseInverse().asDiagonal();
+  ComplexVectorX multipliers;
+  ComplexMatrixX vectors;
+  Eigen::EigenSolver<MatrixX> real_eig(balanced, true);
+  if (real_eig.info() == Eigen::Success) {
+    multipliers = real_eig.eigenvalues();
+    vectors = real_eig.eigenvectors();
+  } else {  // the complex QR as a fallback
+    Eigen::ComplexEigenSolver<ComplexMatrixX> complex_eig(balanced.cast<Complex>(), true);
+    if (complex_eig.info() != Eigen::Success)
+      throw SolverError("Floquet stability: the eigen-solve of the monodromy matrix failed at Omega = " +
+                        format_number(sol.omega));
+    multipliers = complex_eig.eigenvalues();
+    vectors = complex_eig.eigenvectors();
+  }
+  Stability st;
+  st.exponents.resize(2 * m);
+  for (Index e = 0; e < 2 * m; ++e) st.exponents[e] = std::log(multipliers[e]) / period;
+  classify(st, period, tolerance);
+  if (2 * m == 0) return st;
+  // critical mode in Hill's layout: s(t) = e^{-lambda t} q(t) sampled at t_j and its harmonics k = -H..H
+  Index best = 0;
+  for (Index e = 1; e < 2 * m; ++e)
+    if (st.exponents[e].real() > st.exponents[best].real()) best = e;
+  const Complex lambda = st.exponents[best];
+  ComplexVectorX x = scaling.cwiseInverse().cast<Complex>().asDiagonal() * vectors.col(best);  // at t = -h/2
+  ComplexMatrixX mode = ComplexMatrixX::Zero(m, 2 * H + 1);
+  std::size_t run = 0;
+  for (int j = 0; j < N; ++j) {
+    while (j >= runs[run].first + runs[run].count) ++run;
+    x = half_step[run].cast<Complex>() * x;  // to t_j
+    const double t = j * h;
+    const ComplexVectorX periodic = x.head(m) * std::exp(-lambda * t);
+    for (int k = -H; k <= H; ++k) mode.col(k + H) += periodic * std::polar(1.0 / N, -k * w0 * t);
+    x = half_step[run].cast<Complex>() * x;  // to t_j + h/2
+  }
+  st.critical_mode = mode;
   return st;
 }
 

@@ -1,11 +1,15 @@
 // End-to-end tests of `crackle sweep` (modal -> reduced model -> harmonic balance) on a small
 // cracked cantilever: the super-harmonic resonance of A2/A1 at f_b/2, the public fields of
-// sweep.csv and sweep.json, and file:line errors for bad sweep keys.
+// sweep.csv and sweep.json, file:line errors for bad sweep keys, and harmonic balance against the
+// reduced transient (stepped sine) and the full explicit transient (`crackle run`) around f_b/2.
 #include <gtest/gtest.h>
 
 #include "cli_testing.hpp"
 
 #include <array>
+#include <cmath>
+#include <map>
+#include <vector>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -79,6 +83,88 @@ TEST(SweepCommand, SuperHarmonicPeakAtHalfTheBilinearFrequency) {
   for (std::string line; std::getline(csv_file, line);) ++rows;
   EXPECT_EQ(rows, sweep["points"].get<int>());
   EXPECT_TRUE(fs::exists(folder / "sweep_tip.dat"));
+}
+
+/// The columns of a sweep.csv by header (numbers only).
+std::map<std::string, std::vector<double>> read_csv(const fs::path& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> headers;
+  std::stringstream header_stream(line);
+  for (std::string field; std::getline(header_stream, field, ',');) headers.push_back(field);
+  std::map<std::string, std::vector<double>> columns;
+  while (std::getline(in, line)) {
+    std::stringstream row(line);
+    std::size_t i = 0;
+    for (std::string field; std::getline(row, field, ',') && i < headers.size(); ++i)
+      columns[headers[i]].push_back(std::stod(field));
+  }
+  return columns;
+}
+
+/// Column `name` of an ascending frequency table, interpolated linearly at `hz`.
+double interpolate(const std::map<std::string, std::vector<double>>& table, const std::string& name, double hz) {
+  const std::vector<double>& f = table.at("excitation frequency [Hz]");
+  const std::vector<double>& y = table.at(name);
+  for (std::size_t i = 0; i + 1 < f.size(); ++i)
+    if (f[i] <= hz && hz <= f[i + 1]) return y[i] + (y[i + 1] - y[i]) * (hz - f[i]) / (f[i + 1] - f[i]);
+  ADD_FAILURE() << hz << " Hz is outside the sweep";
+  return 0.0;
+}
+
+TEST(SweepCommand, HarmonicBalanceMatchesTheReducedAndTheFullTransient) {
+  // HB (H = 30, converged for A1..A3: A3 moves by < 1e-4 from H = 15) on a dense branch through
+  // f_b/2, interpolated between neighbouring points (spacing 0.04 % of f: interpolation error ~1e-5).
+  const std::string cache = (scratch() / "cache").string();
+  std::string output;
+  ASSERT_EQ(crackle_sweep("dense", kScene,
+                          "--modal-cache " + cache + " --set sweep.harmonics=30 --set sweep.points=200 "
+                          "--set sweep.frequency.from.ratio=0.47 --set sweep.frequency.to.ratio=0.53",
+                          &output), 0) << output;
+  const auto branch = read_csv(scratch() / "dense" / "sweep.csv");
+  // (a) the reduced transient run to steady state (stepped sine) at five frequencies around f_b/2
+  ASSERT_EQ(crackle_sweep("lab", kScene,
+                          "--modal-cache " + cache + " --set sweep.method=stepped_sine --set sweep.points=5 "
+                          "--set sweep.frequency.from.ratio=0.48 --set sweep.frequency.to.ratio=0.52 "
+                          "--set sweep.tolerance=1e-7",
+                          &output), 0) << output;
+  const auto lab = read_csv(scratch() / "lab" / "sweep.csv");
+  ASSERT_EQ(lab.at("excitation frequency [Hz]").size(), 10u);
+  for (std::size_t i = 0; i < 5; ++i) {
+    const double hz = lab.at("excitation frequency [Hz]")[i];
+    for (const char* order : {"A1", "A2", "A3"}) {
+      const std::string column = std::string("tip u_z ") + order + " [m]";
+      const double reference = lab.at(column)[i];
+      const double balance = interpolate(branch, column, hz);
+      std::printf("  %.4f Hz %s: HB %.6e reduced transient %.6e (%+.2e)\n", hz, order, balance, reference,
+                  balance / reference - 1.0);
+      EXPECT_NEAR(balance / reference, 1.0, 5e-3) << hz << " Hz " << order;
+    }
+  }
+  // (b) the full explicit transient (`crackle run`, same mesh) at three of them: A2/A1 within 3 %
+  const std::string spectrum = R"(spectrum:
+  harmonics: 3
+  subharmonics: false
+  steady_state: {tolerance: 1.0e-4, min_periods: 10, window_periods: 4}
+  plots: false
+)";
+  for (const double ratio : {0.49, 0.5, 0.51}) {
+    const std::string name = "full" + std::to_string(int(ratio * 100));
+    const fs::path scene = scratch() / (name + ".yaml");
+    std::ofstream(scene) << kScene.substr(0, kScene.find("sweep:")) << spectrum;
+    const std::string command = std::string(CRACKLE_BINARY_DIR) + "/apps/crackle run " + scene.string() + " -o " +
+                                (scratch() / name).string() + " -q --set transient.excitation.frequency.ratio=" +
+                                std::to_string(ratio) + " --set transient.periods=200 > /dev/null 2>&1";
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    std::ifstream run_file(scratch() / name / "run.json"), spectrum_file(scratch() / name / "spectrum.json");
+    const nlohmann::json run = nlohmann::json::parse(run_file), full = nlohmann::json::parse(spectrum_file);
+    const double hz = run["excitation_hz"];
+    const double reference = full["probes"]["tip"]["indices"]["A2/A1"];
+    const double balance = interpolate(branch, "tip u_z A2/A1 [-]", hz);
+    std::printf("  %.4f Hz A2/A1: HB %.5f full explicit %.5f (%+.2e)\n", hz, balance, reference, balance / reference - 1.0);
+    EXPECT_NEAR(balance / reference, 1.0, 0.03) << hz << " Hz";
+  }
 }
 
 TEST(SweepCommand, BadSweepKeysGiveFileAndLine) {

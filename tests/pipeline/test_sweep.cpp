@@ -1,9 +1,12 @@
 // The sweep pipeline on reduced systems written by hand: the scene's sweep: section (defaults,
 // file:line errors), the linear sweep against the receptance, a bilinear oscillator's
-// super-harmonic resonance at f_b/2, harmonic balance against the stepped sine, and the files.
+// super-harmonic resonance at f_b/2, harmonic balance against the stepped sine, the stepped sine's
+// jumps at the folds of a clearance oscillator, the period-doubled branch against the stepped sine,
+// and the files.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <complex>
 #include <filesystem>
 #include <fstream>
@@ -259,6 +262,128 @@ TEST(SweepBilinear, HarmonicBalanceMatchesTheSteppedSine) {
     // Up and down agree where there is one branch.
     EXPECT_NEAR(stepped.points[7 - i].solution.amplitude(0, 1) / point.solution.amplitude(0, 1), 1.0, 1e-6);
   }
+}
+
+/// One mode (omega 1, damping ratio `zeta`), one pair row with gap g0 (b = 1, R = 0), penalty k:
+/// q'' + 2 zeta q' + q = f cos(Omega t) + k max(0, -g0 - q). Output rows = q.
+reduced::ReducedSystem oscillator(double zeta, double penalty, double gap, double load) {
+  reduced::ReducedSystem s = bilinear_oscillator();
+  s.rayleigh_alpha = 2.0 * zeta;
+  s.normal_penalty = penalty;
+  s.initial_gap = VectorX::Constant(1, gap);
+  s.load_modal = VectorX::Constant(1, load);
+  return s;
+}
+
+TEST(SweepStability, SteppedSineJumpsWhereTheBranchFoldsAndTheMiddleIsUnstable) {
+  // A clearance (g0 = 5e-6) hardening oscillator, light damping: the resonance leans right, a stepped
+  // sine up falls off the upper branch, a stepped sine down jumps onto it, at different frequencies.
+  const reduced::ReducedSystem s = oscillator(0.01, 3.0, 5e-6, 0.5e-6);
+  const double from = 1.0 / kTwoPi, to = 1.3 / kTwoPi;
+  constexpr std::size_t kSteps = 21;  // 0.015 rad/s apart
+  SweepSettings stepped = settings_for(from, to, 3, kSteps);  // A1 only: a coarser step
+  stepped.section.method = "stepped_sine";
+  stepped.section.tolerance = 1e-5;
+  stepped.section.max_periods = 3000;
+  const SweepResult lab = stepped_sine_sweep(s, stepped);
+  ASSERT_TRUE(lab.warnings.empty()) << lab.warnings.front();
+  // the largest drop of A1 going up, the largest rise going down: [f_i, f_i+1] around each jump
+  std::size_t up = 0, down = 0;
+  const auto a1 = [&](std::size_t i) { return lab.points[i].solution.amplitude(0, 1.0); };
+  const std::size_t n = kSteps;
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    if (a1(i) - a1(i + 1) > a1(up) - a1(up + 1)) up = i;                      // up: points 0..n-1, rising f
+    if (a1(n + i + 1) - a1(n + i) > a1(n + down + 1) - a1(n + down)) down = i;  // down: n..2n-1, falling f
+  }
+  const double jump_up[2] = {lab.points[up].frequency_hz(), lab.points[up + 1].frequency_hz()};
+  const double jump_down[2] = {lab.points[n + down + 1].frequency_hz(), lab.points[n + down].frequency_hz()};
+  std::printf("  stepped sine: up falls %.3e -> %.3e between %.5f and %.5f rad/s, down rises %.3e -> %.3e between "
+              "%.5f and %.5f rad/s\n", a1(up), a1(up + 1), kTwoPi * jump_up[0], kTwoPi * jump_up[1], a1(n + down),
+              a1(n + down + 1), kTwoPi * jump_down[1], kTwoPi * jump_down[0]);
+  ASSERT_GT(a1(up), 1.5 * a1(up + 1));
+  ASSERT_GT(a1(n + down + 1), 1.5 * a1(n + down));
+  ASSERT_GT(jump_up[0], jump_down[1]);  // hysteresis: the two jumps do not overlap
+
+  SweepSettings settings = settings_for(from, to, 10, 100);
+  const SweepResult branch = harmonic_balance_sweep(s, settings);
+  ASSERT_TRUE(branch.completed);
+  std::vector<SweepEvent> folds;
+  for (const SweepEvent& event : branch.events)
+    if (event.kind == "fold") folds.push_back(event);
+  ASSERT_EQ(folds.size(), 2u);
+  std::printf("  harmonic balance: folds at %.5f and %.5f rad/s\n", kTwoPi * folds[0].frequency_hz,
+              kTwoPi * folds[1].frequency_hz);
+  // the upper fold where the stepped sine up falls off, the lower one where the stepped sine down jumps
+  // up (a finite frequency step may leave the shrinking basin of the upper branch one step early)
+  const double step = (to - from) / double(n - 1);
+  EXPECT_GE(folds[0].frequency_hz, jump_up[0]);
+  EXPECT_LE(folds[0].frequency_hz, jump_up[1]);
+  EXPECT_GE(folds[1].frequency_hz, jump_down[0] - step);
+  EXPECT_LE(folds[1].frequency_hz, jump_down[1]);
+  // unstable between the folds (one real multiplier > 1), stable outside, Hill agreeing at both changes
+  for (std::size_t i = 0; i < branch.points.size(); ++i) {
+    const bool middle = i >= folds[0].point && i < folds[1].point;
+    EXPECT_EQ(branch.points[i].stable, !middle) << "point " << i << " at " << branch.points[i].frequency_hz() << " Hz";
+  }
+  for (const SweepEvent& event : folds) EXPECT_EQ(event.hill_check, 1);
+}
+
+TEST(SweepStability, PeriodDoublingAndTheSubharmonicBranchMatchTheSteppedSine) {
+  // Bilinear (closed at rest, stiffness 1 open, 4 closed; f_b = 4/3 rad/s), 1 % damping, driven near
+  // 2 f_b: the period-one response loses stability through -1 and a period-two one (A1/2) takes over.
+  const reduced::ReducedSystem s = oscillator(0.01, 3.0, 0.0, 1e-6);
+  const double from = 2.0 / kTwoPi, to = 2.6 / kTwoPi;
+  SweepSettings settings = settings_for(from, to, 20, 60);
+  settings.section.subharmonic = 2;
+  const SweepResult result = harmonic_balance_sweep(s, settings);
+  ASSERT_TRUE(result.completed);
+  std::vector<double> doublings;
+  for (const SweepEvent& event : result.events) {
+    if (event.kind != "period_doubling") continue;
+    doublings.push_back(event.frequency_hz);
+    EXPECT_EQ(event.hill_check, 1);
+    EXPECT_EQ(result.points[event.point].segment, 0);
+  }
+  ASSERT_GE(doublings.size(), 1u);
+  std::printf("  period doubling of the period-one branch at %.4f rad/s\n", kTwoPi * doublings.front());
+  EXPECT_GT(kTwoPi * doublings.front(), 2.2);
+  EXPECT_LT(kTwoPi * doublings.front(), 2.35);
+  std::size_t period_two = 0;
+  for (const SweepPoint& point : result.points) {
+    if (point.segment == 0) {
+      EXPECT_EQ(point.solution.subharmonic, 1);
+      continue;
+    }
+    ++period_two;
+    EXPECT_EQ(point.solution.subharmonic, 2);
+    EXPECT_GE(point.frequency_hz(), doublings.front() * (1.0 - 1e-3));  // born at the doubling
+  }
+  ASSERT_GT(period_two, 5u);
+  // the stepped sine (the reduced transient to steady state) at 2.5 rad/s, started from 2.45
+  SweepSettings stepped = settings_for(2.45 / kTwoPi, 2.5 / kTwoPi, 6, 2);  // orders up to 3: a coarser step
+  stepped.section.method = "stepped_sine";
+  stepped.section.subharmonic = 2;
+  stepped.section.tolerance = 1e-7;
+  stepped.section.max_periods = 2000;
+  const SweepResult lab = stepped_sine_sweep(s, stepped);
+  ASSERT_TRUE(lab.warnings.empty()) << lab.warnings.front();
+  const sweep::Solution& reference = lab.points[1].solution;
+  const SweepPoint* nearest = nullptr;
+  for (const SweepPoint& point : result.points)
+    if (point.segment > 0 && (!nearest || std::abs(point.solution.omega - 2.5) < std::abs(nearest->solution.omega - 2.5)))
+      nearest = &point;
+  sweep::HarmonicBalanceOptions options;
+  options.harmonics = 20;
+  options.subharmonic = 2;
+  const sweep::HarmonicBalance balance(s, options);
+  const sweep::Solution solution = balance.solve(2.5, nearest->solution.gaps);
+  std::printf("  2.5 rad/s: HB A1/2 %.5e A1 %.5e | stepped sine A1/2 %.5e A1 %.5e (%d periods)\n",
+              solution.amplitude(0, 0.5), solution.amplitude(0, 1.0), reference.amplitude(0, 0.5),
+              reference.amplitude(0, 1.0), lab.points[1].periods);
+  EXPECT_GT(reference.amplitude(0, 0.5), reference.amplitude(0, 1.0));  // the transient is on a period-two orbit
+  EXPECT_NEAR(solution.amplitude(0, 0.5) / reference.amplitude(0, 0.5), 1.0, 0.05);
+  EXPECT_NEAR(solution.amplitude(0, 1.0) / reference.amplitude(0, 1.0), 1.0, 0.05);
+  EXPECT_TRUE(balance.floquet_stability(solution).stable);
 }
 
 TEST(SweepFiles, TableJsonAndPlot) {

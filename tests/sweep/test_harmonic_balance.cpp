@@ -1,6 +1,6 @@
 // Harmonic balance on hand-built reduced systems (HYBRID.md §4-5): the linear receptance, a bilinear
 // oscillator against an independent time integration, continuation through a fold with Hill's
-// stability, and a period-doubled (nu = 2) branch.
+// stability (the monodromy against Hill's method), and a period-doubled (nu = 2) branch.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -471,6 +471,44 @@ TEST(Friction, CostOfOneNewtonIteration) {
                   std::chrono::duration<double, std::milli>(end - mid).count());
     }
   }
+}
+
+/// Largest distance from a multiplier of `a` to the nearest one of `b`.
+double multiplier_distance(const ComplexVectorX& a, const ComplexVectorX& b) {
+  double worst = 0.0;
+  for (Index i = 0; i < a.size(); ++i) {
+    double nearest = 1e300;
+    for (Index j = 0; j < b.size(); ++j) nearest = std::min(nearest, std::abs(a[i] - b[j]));
+    worst = std::max(worst, nearest);
+  }
+  return worst;
+}
+
+TEST(Stability, MonodromyAgreesWithHillAsHGrows) {
+  // Four modes, five pairs, some closed at rest: Hill's truncated multipliers approach the monodromy's
+  // (the exact ones of the sampled orbit) as H grows, and both give the same unstable counts.
+  const auto s = random_system(4, 5, 7);
+  std::vector<double> errors;
+  for (int harmonics : {4, 8, 16}) {
+    HarmonicBalanceOptions opt;
+    opt.harmonics = harmonics;
+    HarmonicBalance hb(s, opt);
+    const Solution sol = hb.solve(1.7);
+    const Stability hill = hb.hill_stability(sol);
+    const Stability floquet = hb.floquet_stability(sol);
+    ASSERT_EQ(floquet.multipliers.size(), 8);
+    ASSERT_EQ(hill.multipliers.size(), 8);
+    errors.push_back(std::max(multiplier_distance(floquet.multipliers, hill.multipliers),
+                              multiplier_distance(hill.multipliers, floquet.multipliers)));
+    std::printf("    H %2d: max |rho_floquet - rho_hill| %.3e, max Re lambda floquet %+.5e hill %+.5e\n", harmonics,
+                errors.back(), floquet.max_real_part, hill.max_real_part);
+    EXPECT_EQ(hill.stable, floquet.stable);
+    EXPECT_EQ(hill.unstable_positive, floquet.unstable_positive);
+    EXPECT_EQ(hill.unstable_negative, floquet.unstable_negative);
+    EXPECT_EQ(hill.unstable_complex, floquet.unstable_complex);
+  }
+  EXPECT_LT(errors.back(), 1e-3);
+  EXPECT_LT(errors.back(), 0.1 * errors.front());
 }
 
 TEST(Continuation, FoldOfAHardeningClearanceOscillator) {
