@@ -209,6 +209,23 @@ MeshPartition::MeshPartition(const mesh::Mesh& global, std::vector<int> element_
   check(VecCreateGhost(PETSC_COMM_WORLD, static_cast<PetscInt>(3 * n_owned_nodes_), PETSC_DECIDE,
                        static_cast<PetscInt>(ghosts.size()), ghosts.data(), &halo_),
         "VecCreateGhost");
+  // The boundary: owned entries that another rank holds as a ghost (found by scattering ones).
+  Vec form = nullptr;
+  PetscScalar* array = nullptr;
+  check(VecGhostGetLocalForm(halo_, &form), "VecGhostGetLocalForm");
+  check(VecGetArray(form, &array), "VecGetArray");
+  const Index owned = n_owned_dofs(), n_local = static_cast<Index>(global_dofs_.size());
+  for (Index k = 0; k < n_local; ++k) array[k] = k < owned ? 0.0 : 1.0;
+  check(VecRestoreArray(form, &array), "VecRestoreArray");
+  check(VecGhostUpdateBegin(halo_, ADD_VALUES, SCATTER_REVERSE), "VecGhostUpdateBegin");
+  check(VecGhostUpdateEnd(halo_, ADD_VALUES, SCATTER_REVERSE), "VecGhostUpdateEnd");
+  check(VecGetArray(form, &array), "VecGetArray");
+  for (Index k = 0; k < owned; ++k) {
+    if (array[k] != 0.0) boundary_.push_back(k);
+    array[k] = 0.0;
+  }
+  check(VecRestoreArray(form, &array), "VecRestoreArray");
+  check(VecGhostRestoreLocalForm(halo_, &form), "VecGhostRestoreLocalForm");
 }
 
 MeshPartition::~MeshPartition() {
@@ -224,30 +241,34 @@ HaloCounts MeshPartition::halo_counts() const {
   HaloCounts counts;
   counts.owned_dofs = 3 * n_owned_nodes_;
   counts.ghost_dofs = 3 * (static_cast<Index>(global_nodes_.size()) - n_owned_nodes_);
+  counts.boundary_dofs = static_cast<Index>(boundary_.size());
   counts.bytes_per_step = 2.0 * 8.0 * static_cast<double>(counts.ghost_dofs);
   return counts;
 }
 
 void MeshPartition::complete(VectorX& local) const {
-  const std::size_t n = local.size();
-  if (n != global_dofs_.size()) throw InputError("distributed transient: a local vector of the wrong size");
+  // Only the ghosts and the owned entries that are ghosts elsewhere (the boundary) are copied: the
+  // PETSc Vec's owned part stays zero between calls, so the scatter-add leaves there the sum of the
+  // other ranks' shares.
+  const Index n = static_cast<Index>(local.size()), owned = n_owned_dofs();
+  if (n != static_cast<Index>(global_dofs_.size())) throw InputError("distributed transient: a local vector of the wrong size");
   Vec form = nullptr;
   PetscScalar* array = nullptr;
   check(VecGhostGetLocalForm(halo_, &form), "VecGhostGetLocalForm");
   check(VecGetArray(form, &array), "VecGetArray");
-  std::memcpy(array, local.data(), n * sizeof(double));
+  std::memcpy(array + owned, local.data() + owned, (n - owned) * sizeof(double));
   check(VecRestoreArray(form, &array), "VecRestoreArray");
-  check(VecGhostRestoreLocalForm(halo_, &form), "VecGhostRestoreLocalForm");
-  // Element shares of the ghosts added to their owners, then the sums copied back to the ghosts.
   check(VecGhostUpdateBegin(halo_, ADD_VALUES, SCATTER_REVERSE), "VecGhostUpdateBegin");
   check(VecGhostUpdateEnd(halo_, ADD_VALUES, SCATTER_REVERSE), "VecGhostUpdateEnd");
+  check(VecGetArray(form, &array), "VecGetArray");
+  for (Index k : boundary_) array[k] = local[k] += array[k];
+  check(VecRestoreArray(form, &array), "VecRestoreArray");
   check(VecGhostUpdateBegin(halo_, INSERT_VALUES, SCATTER_FORWARD), "VecGhostUpdateBegin");
   check(VecGhostUpdateEnd(halo_, INSERT_VALUES, SCATTER_FORWARD), "VecGhostUpdateEnd");
-  const PetscScalar* result = nullptr;
-  check(VecGhostGetLocalForm(halo_, &form), "VecGhostGetLocalForm");
-  check(VecGetArrayRead(form, &result), "VecGetArrayRead");
-  std::memcpy(local.data(), result, n * sizeof(double));
-  check(VecRestoreArrayRead(form, &result), "VecRestoreArrayRead");
+  check(VecGetArray(form, &array), "VecGetArray");
+  std::memcpy(local.data() + owned, array + owned, (n - owned) * sizeof(double));
+  for (Index k : boundary_) array[k] = 0.0;
+  check(VecRestoreArray(form, &array), "VecRestoreArray");
   check(VecGhostRestoreLocalForm(halo_, &form), "VecGhostRestoreLocalForm");
 }
 

@@ -39,6 +39,7 @@ std::vector<int> partition_elements(const mesh::Mesh& mesh, int ranks);
 struct HaloCounts {
   Index owned_dofs = 0;
   Index ghost_dofs = 0;
+  Index boundary_dofs = 0;  ///< owned DOFs that other ranks hold as ghosts
   /// Bytes this rank sends and receives per step: ghost DOFs x 8 bytes, twice (the scatter-add of
   /// the element shares, then the completed sums back to the ghosts).
   double bytes_per_step = 0.0;
@@ -92,6 +93,7 @@ class MeshPartition final : public transient::Distribution {
   Index n_owned_nodes_ = 0;
   std::vector<Index> global_nodes_, local_of_, global_dofs_;
   Vec halo_ = nullptr;  ///< ghosted: owned DOFs in the PETSc numbering, ghosts after them
+  std::vector<Index> boundary_;  ///< owned local DOFs that other ranks hold as ghosts
 };
 
 }  // namespace crackle::distributed
