@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_arguments.hpp"
 #include "core/resources.hpp"
 #include "distributed/partition.hpp"
 #include "fem/material.hpp"
@@ -25,13 +26,7 @@ namespace {
 
 using namespace crackle;
 
-std::vector<double> parse_list(const std::string& text) {
-  std::vector<double> values;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) values.push_back(std::stod(item));
-  return values;
-}
+using bench::parse_list;
 
 double max_over_ranks(double value) {
   MPI_Allreduce(MPI_IN_PLACE, &value, 1, MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);

@@ -15,25 +15,15 @@
 #include <vector>
 
 #include "contact/contact_force.hpp"
+#include "bench_arguments.hpp"
 #include "core/resources.hpp"
 #include "fem/material.hpp"
 #include "mesh/box.hpp"
 #include "transient/solver.hpp"
 
-namespace {
-
-std::vector<double> parse_list(const std::string& text) {
-  std::vector<double> values;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) values.push_back(std::stod(item));
-  return values;
-}
-
-}  // namespace
-
 int main(int argc, char** argv) {
   using namespace crackle;
+  using bench::parse_list;
   std::vector<double> orders = {1, 2, 3, 4}, elements = {1e4, 1e5, 1e6}, threads = {1, 2};
   double seconds = 2.0, max_dofs = 3e7;
   bool crack = false;
