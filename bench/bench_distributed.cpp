@@ -57,8 +57,10 @@ Case make_case(int order, int n) {
   return c;
 }
 
-/// Runs `steps` steps; returns the summary of this rank.
-transient::TransientSummary run(const mesh::Mesh& mesh, transient::TransientProblem problem, double steps) {
+/// Runs `steps` steps; returns the summary of this rank and, with a partition, the wall time of the
+/// steps spent in its halo and reductions.
+transient::TransientSummary run(const mesh::Mesh& mesh, transient::TransientProblem problem, double steps,
+                                const distributed::MeshPartition* partition = nullptr, double* communication = nullptr) {
   transient::TransientOptions options;
   options.progress = false;
   options.end_time = 1e-12;
@@ -66,7 +68,10 @@ transient::TransientSummary run(const mesh::Mesh& mesh, transient::TransientProb
   options.time_step = dt;
   options.end_time = (steps - 0.5) * dt;
   transient::TransientSolver solver(mesh, problem, options);
-  return solver.run();
+  const double before = partition ? partition->communication_seconds() : 0.0;
+  transient::TransientSummary summary = solver.run();
+  if (communication) *communication = partition->communication_seconds() - before;
+  return summary;
 }
 
 }  // namespace
@@ -93,9 +98,9 @@ int main(int argc, char** argv) {
   if (PetscInitialize(&petsc_argc, &petsc_argv, nullptr, nullptr) != 0) return 1;
   const int rank = distributed::world_rank(), ranks = distributed::world_size();
   if (rank == 0) {
-    std::printf("%-3s %-9s %-10s %-5s %-7s %-6s %-12s %-16s %-11s %-14s %-12s %-12s\n", "p", "elements", "dofs", "ranks",
+    std::printf("%-3s %-9s %-10s %-5s %-7s %-6s %-12s %-16s %-11s %-14s %-12s %-12s %-8s\n", "p", "elements", "dofs", "ranks",
                 "threads", "steps", "ns/dof-step", "elements/rank", "ghost dofs", "halo B/step", "RSS/rank MB",
-                "1-proc ns");
+                "1-proc ns", "comm %");
   }
   for (double order_value : orders) {
     const int order = static_cast<int>(order_value);
@@ -120,7 +125,9 @@ int main(int argc, char** argv) {
       problem.initial.velocity = partition.local_field(c.velocity);
       problem.terms.push_back(partition.local_contact(c.materials, contact::ContactOptions{}));
       problem.distribution = std::shared_ptr<const transient::Distribution>(&partition, [](const auto*) {});
-      const transient::TransientSummary summary = run(partition.local_mesh(), problem, steps);
+      double communication = 0.0;  // of the steps, in the halo and the reductions (waits included)
+      const transient::TransientSummary summary = run(partition.local_mesh(), problem, steps, &partition, &communication);
+      communication = max_over_ranks(communication);
       const distributed::HaloCounts halo = partition.halo_counts();
       const double ghosts = max_over_ranks(static_cast<double>(halo.ghost_dofs));
       const double bytes = max_over_ranks(halo.bytes_per_step);
@@ -130,10 +137,10 @@ int main(int argc, char** argv) {
         char balance[64];
         std::snprintf(balance, sizeof balance, "%lld..%lld", static_cast<long long>(summary.elements_min),
                       static_cast<long long>(summary.elements_max));
-        std::printf("%-3d %-9lld %-10lld %-5d %-7d %-6lld %-12.2f %-16s %-11.0f %-14.0f %-12.0f %-12.2f\n", order,
+        std::printf("%-3d %-9lld %-10lld %-5d %-7d %-6lld %-12.2f %-16s %-11.0f %-14.0f %-12.0f %-12.2f %-8.1f\n", order,
                     static_cast<long long>(summary.n_elements), static_cast<long long>(summary.n_dofs), ranks,
                     omp_get_max_threads(), static_cast<long long>(summary.steps), ns, balance, ghosts, bytes, rss,
-                    serial_ns);
+                    serial_ns, 100.0 * communication / std::max(summary.wall_s, 1e-12));
         std::fflush(stdout);
       }
     }

@@ -250,6 +250,7 @@ void MeshPartition::complete(VectorX& local) const {
   // Only the ghosts and the owned entries that are ghosts elsewhere (the boundary) are copied: the
   // PETSc Vec's owned part stays zero between calls, so the scatter-add leaves there the sum of the
   // other ranks' shares.
+  const Stopwatch watch;
   const Index n = static_cast<Index>(local.size()), owned = n_owned_dofs();
   if (n != static_cast<Index>(global_dofs_.size())) throw InputError("distributed transient: a local vector of the wrong size");
   Vec form = nullptr;
@@ -270,10 +271,13 @@ void MeshPartition::complete(VectorX& local) const {
   for (Index k : boundary_) array[k] = 0.0;
   check(VecRestoreArray(form, &array), "VecRestoreArray");
   check(VecGhostRestoreLocalForm(halo_, &form), "VecGhostRestoreLocalForm");
+  communication_seconds_ += watch.seconds();
 }
 
 void MeshPartition::sum(std::vector<double>& values) const {
+  const Stopwatch watch;
   MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  communication_seconds_ += watch.seconds();
 }
 
 VectorX MeshPartition::local_field(const VectorX& global_field) const {

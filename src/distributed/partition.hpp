@@ -19,6 +19,7 @@
 #include <petscvec.h>
 
 #include "contact/contact_force.hpp"
+#include "core/resources.hpp"
 #include "fem/constraints.hpp"
 #include "mesh/mesh.hpp"
 #include "transient/distribution.hpp"
@@ -67,6 +68,8 @@ class MeshPartition final : public transient::Distribution {
   /// Local node of a global node that this rank owns, else -1 (a probe's node).
   Index owned_node(Index global_node) const;
   HaloCounts halo_counts() const;
+  /// Wall time spent in complete() and sum() so far [s]: transfers and waiting for the other ranks.
+  double communication_seconds() const { return communication_seconds_; }
 
   /// A field over the global `open` DOFs restricted to the local DOFs.
   VectorX local_field(const VectorX& global_field) const;
@@ -94,6 +97,7 @@ class MeshPartition final : public transient::Distribution {
   std::vector<Index> global_nodes_, local_of_, global_dofs_;
   Vec halo_ = nullptr;  ///< ghosted: owned DOFs in the PETSc numbering, ghosts after them
   std::vector<Index> boundary_;  ///< owned local DOFs that other ranks hold as ghosts
+  mutable double communication_seconds_ = 0.0;
 };
 
 }  // namespace crackle::distributed
