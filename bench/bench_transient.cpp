@@ -21,14 +21,9 @@
 #include "mesh/box.hpp"
 #include "transient/solver.hpp"
 
-namespace {
-
-using crackle::bench::parse_list;
-
-}  // namespace
-
 int main(int argc, char** argv) {
   using namespace crackle;
+  using bench::parse_list;
   std::vector<double> orders = {1, 2, 3, 4}, elements = {1e4, 1e5, 1e6}, threads = {1, 2};
   double seconds = 2.0, max_dofs = 3e7;
   bool crack = false;

@@ -84,7 +84,11 @@ PenaltyChoice choose_penalty(const mesh::Mesh& mesh, const fem::Materials& mater
 
 PenaltyContact::PenaltyContact(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const fem::Materials& materials,
                                const ContactOptions& options)
-    : options_(options), penalty_(choose_penalty(mesh, materials, options)) {
+    : PenaltyContact(mesh, dofs, options, choose_penalty(mesh, materials, options)) {}
+
+PenaltyContact::PenaltyContact(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const ContactOptions& options,
+                               const PenaltyChoice& penalty)
+    : options_(options), penalty_(penalty) {
   if (static_cast<Index>(dofs.dof_node.size()) != mesh.n_nodes()) {
     throw InputError("contact: DOF map has " + std::to_string(dofs.dof_node.size()) + " entries for a mesh of " +
                      std::to_string(mesh.n_nodes()) + " nodes");
@@ -100,6 +104,11 @@ PenaltyContact::PenaltyContact(const mesh::Mesh& mesh, const mesh::DofMap& dofs,
     total_area_ += source.area;
     pairs_.push_back(pair);
   }
+}
+
+void PenaltyContact::count_owned_pairs_only(Index n_owned_dofs, double total_area) {
+  for (Pair& pair : pairs_) pair.counted = pair.minus_dof < n_owned_dofs;
+  total_area_ = total_area;
 }
 
 void PenaltyContact::reset(const VectorX& displacement) {
@@ -132,8 +141,9 @@ void PenaltyContact::add_force(const VectorX& displacement, VectorX& force) {
     const double gap = options_.initial_gap + relative.dot(pair.normal);  // eq. (9)
     const double pressure = penalty_pressure(gap, normal_penalty);        // eq. (25d)
     Vec3 traction = pressure * pair.normal;
-    stored += pair.area * normal_penalty_energy(gap, normal_penalty);
-    if (gap < 0.0) {
+    const double counted = pair.counted ? 1.0 : 0.0;
+    stored += counted * pair.area * normal_penalty_energy(gap, normal_penalty);
+    if (gap < 0.0 && pair.counted) {
       ++closed;
       closed_area += pair.area;
     }
@@ -141,9 +151,9 @@ void PenaltyContact::add_force(const VectorX& displacement, VectorX& force) {
       const CoulombUpdate update = coulomb_return_mapping(pair.traction, relative - pair.previous_relative, pair.normal,
                                                           tangential_penalty, mu, pressure);  // eq. (15)
       pair.traction = update.traction;
-      if (update.slipping && pressure > 0.0) ++slipping;
-      dissipated += pair.area * update.dissipation;
-      stored += pair.area * tangential_penalty_energy(update.traction, tangential_penalty);
+      if (update.slipping && pressure > 0.0 && pair.counted) ++slipping;
+      dissipated += counted * pair.area * update.dissipation;
+      stored += counted * pair.area * tangential_penalty_energy(update.traction, tangential_penalty);
       traction += update.traction;
     }
     pair.previous_relative = relative;
@@ -189,6 +199,7 @@ void PenaltyContact::add_implicit_force(const VectorX& displacement, const Vecto
     pair.previous_relative = free_end + factor * inverse_sum.cwiseProduct(pair.force / pair.area);
     force.segment<3>(pair.minus_dof) += pair.force;
     force.segment<3>(pair.plus_dof) -= pair.force;
+    if (!pair.counted) continue;  // a ghost pair: its owner counts it
     stored += pair.area * (normal_penalty_energy(response.gap, normal_penalty) +
                            tangential_penalty_energy(response.traction, tangential_penalty));
     dissipated += pair.area * response.dissipation;
@@ -203,13 +214,17 @@ void PenaltyContact::add_implicit_force(const VectorX& displacement, const Vecto
 
 double PenaltyContact::force_dot(const VectorX& x) const {
   double sum = 0.0;
-  for (const Pair& pair : pairs_) sum += pair.force.dot(x.segment<3>(pair.minus_dof) - x.segment<3>(pair.plus_dof));
+  for (const Pair& pair : pairs_) {
+    if (pair.counted) sum += pair.force.dot(x.segment<3>(pair.minus_dof) - x.segment<3>(pair.plus_dof));
+  }
   return sum;
 }
 
 Vec3 PenaltyContact::total_force() const {
   Vec3 total = Vec3::Zero();
-  for (const Pair& pair : pairs_) total += pair.force;
+  for (const Pair& pair : pairs_) {
+    if (pair.counted) total += pair.force;
+  }
   return total;
 }
 

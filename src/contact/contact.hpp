@@ -84,6 +84,10 @@ class PenaltyContact {
  public:
   PenaltyContact(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const fem::Materials& materials,
                  const ContactOptions& options);
+  /// With penalties chosen elsewhere (on the whole mesh, for one rank's share of it, which may hold
+  /// no pair at all).
+  PenaltyContact(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const ContactOptions& options,
+                 const PenaltyChoice& penalty);
 
   const PenaltyChoice& penalty() const { return penalty_; }
   const ContactOptions& options() const { return options_; }
@@ -109,6 +113,12 @@ class PenaltyContact {
   /// are solved for it in closed form (implicit_pair_response). Call exactly once per step.
   void add_implicit_force(const VectorX& displacement, const VectorX& velocity, const VelocityUpdate& update,
                           VectorX& force);
+
+  /// For one rank of a distributed run (transient::Distribution): the pairs whose minus DOF is
+  /// below `n_owned_dofs` are this rank's own; the others (ghost pairs, evaluated alike so that
+  /// ghost DOFs get the same forces as their owners) are left out of every sum (force_dot, energies,
+  /// counts, total_force). `total_area` is that of the whole crack (for the closed fraction).
+  void count_owned_pairs_only(Index n_owned_dofs, double total_area);
 
   /// Dot product of the force vector of the last step with x.
   double force_dot(const VectorX& x) const;
@@ -138,6 +148,7 @@ class PenaltyContact {
     Vec3 traction = Vec3::Zero();           ///< tangential traction on minus [Pa]
     Vec3 previous_relative = Vec3::Zero();  ///< u_minus - u_plus where the last step left it
     Vec3 force = Vec3::Zero();              ///< force on minus at the last step [N]
+    bool counted = true;                    ///< in the sums (false: a ghost pair of another rank)
   };
   void finish_step(double stored, double dissipated, Index closed, double closed_area, Index slipping);
 

@@ -17,8 +17,16 @@ class ContactForce final : public fem::ForceTerm {
   ContactForce(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const fem::Materials& materials,
                const ContactOptions& options)
       : contact_(mesh, dofs, materials, options) {}
+  /// With penalties chosen elsewhere (PenaltyContact's second constructor).
+  ContactForce(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const ContactOptions& options,
+               const PenaltyChoice& penalty)
+      : contact_(mesh, dofs, options, penalty) {}
 
   const PenaltyContact& contact() const { return contact_; }
+  /// PenaltyContact::count_owned_pairs_only (one rank of a distributed run).
+  void count_owned_pairs_only(Index n_owned_dofs, double total_area) {
+    contact_.count_owned_pairs_only(n_owned_dofs, total_area);
+  }
 
   std::string name() const override { return "contact"; }
   fem::EnergyRole role() const override { return fem::EnergyRole::potential; }

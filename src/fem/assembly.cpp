@@ -412,7 +412,8 @@ SparseMatrix assemble_consistent_mass(const mesh::Mesh& mesh, const mesh::DofMap
   return assemble(Kind::mass, mesh, dofs, materials, AssemblyOptions{}, nullptr);
 }
 
-VectorX assemble_lumped_mass(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const Materials& materials) {
+VectorX assemble_lumped_mass(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const Materials& materials,
+                             bool element_shares) {
   // GLL nodal quadrature of eq. (25c) (hexahedra) or HRZ lumping (tetrahedra): diagonal, one entry
   // per DOF, same for the 3 components.
   check_inputs(mesh, dofs, &materials);
@@ -435,7 +436,7 @@ VectorX assemble_lumped_mass(const mesh::Mesh& mesh, const mesh::DofMap& dofs, c
   }
   VectorX lumped(dofs.n_dofs());
   for (Index r = 0; r < dofs.n_dof_nodes; ++r) {
-    if (!(nodal[r] > 0.0)) {
+    if (!(nodal[r] > 0.0) && !(element_shares && nodal[r] == 0.0)) {
       throw InputError("lumped mass " + format_number(nodal[r]) + " of DOF node " + std::to_string(r) +
                        " is not positive (material density <= 0, or a node outside every element)");
     }

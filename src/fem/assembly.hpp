@@ -22,8 +22,10 @@ SparseMatrix assemble_consistent_mass(const mesh::Mesh& mesh, const mesh::DofMap
                                       const Materials& materials);
 
 /// Diagonal lumped mass (one entry per DOF): GLL nodal quadrature on hexahedra, HRZ lumping (diagonal
-/// of the consistent mass scaled to the element mass) on tetrahedra. Strictly positive.
-VectorX assemble_lumped_mass(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const Materials& materials);
+/// of the consistent mass scaled to the element mass) on tetrahedra. Strictly positive, unless
+/// `element_shares` (one rank's elements of a distributed mesh: a node may lie outside them all).
+VectorX assemble_lumped_mass(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const Materials& materials,
+                             bool element_shares = false);
 
 /// Knobs of the global assembly (defaults are what production runs use).
 struct AssemblyOptions {

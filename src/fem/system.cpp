@@ -20,11 +20,12 @@ VectorX LoadShape::dense(Index n_dofs) const {
 }
 
 System::System(const mesh::Mesh& mesh, const Materials& materials, const std::vector<DirichletCondition>& dirichlet,
-               mesh::Variant variant, const ElasticOperatorOptions& elastic_options)
+               mesh::Variant variant, const ElasticOperatorOptions& elastic_options, bool element_shares)
     : mesh_(&mesh),
       materials_(&materials),
       variant_(variant),
       elastic_options_(elastic_options),
+      element_shares_(element_shares),
       dofs_(mesh::make_dof_map(mesh, variant)),
       constraints_(make_constraints(dofs_, dirichlet)),
       lazy_(std::make_unique<Lazy>()) {}
@@ -33,7 +34,7 @@ System::~System() = default;
 System::System(System&&) noexcept = default;
 
 const VectorX& System::lumped_mass() const {
-  if (!lazy_->lumped_mass) lazy_->lumped_mass = std::make_unique<VectorX>(assemble_lumped_mass(*mesh_, dofs_, *materials_));
+  if (!lazy_->lumped_mass) lazy_->lumped_mass = std::make_unique<VectorX>(assemble_lumped_mass(*mesh_, dofs_, *materials_, element_shares_));
   return *lazy_->lumped_mass;
 }
 

@@ -42,8 +42,10 @@ struct LoadShape {
 /// One variant of the body. `mesh` and `materials` are borrowed and must outlive it.
 class System {
  public:
+  /// `element_shares`: the mesh is one rank's share of a distributed mesh (transient::Distribution),
+  /// whose lumped mass is completed by the halo; a node may lie outside its elements.
   System(const mesh::Mesh& mesh, const Materials& materials, const std::vector<DirichletCondition>& dirichlet,
-         mesh::Variant variant, const ElasticOperatorOptions& elastic_options = {});
+         mesh::Variant variant, const ElasticOperatorOptions& elastic_options = {}, bool element_shares = false);
   ~System();
   System(System&&) noexcept;
 
@@ -72,6 +74,7 @@ class System {
   const Materials* materials_;
   mesh::Variant variant_;
   ElasticOperatorOptions elastic_options_;
+  bool element_shares_ = false;
   mesh::DofMap dofs_;
   Constraints constraints_;
   struct Lazy;

@@ -41,9 +41,10 @@ void CentralDifference::step(SecondOrderSystem& system, double time, double dt_p
     }
     return;
   }
+  const Index owned = system.n_owned();
   double kinetic_half = 0.0, kinetic_mid = 0.0, force_displacement = 0.0, force_velocity = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : kinetic_half, kinetic_mid, force_displacement, force_velocity) if (n > kParallelMinimum)
-  for (Index k = 0; k < n; ++k) {
+#pragma omp parallel for schedule(static) reduction(+ : kinetic_half, kinetic_mid, force_displacement, force_velocity) if (owned > kParallelMinimum)
+  for (Index k = 0; k < owned; ++k) {
     const double v_old = v[k];
     const double v_new = scale * (damped * v_old + h * inverse_mass[k] * f[k]);
     const double v_sum = v_old + v_new;
@@ -51,6 +52,12 @@ void CentralDifference::step(SecondOrderSystem& system, double time, double dt_p
     kinetic_mid += mass[k] * v_sum * v_sum;
     force_displacement += f[k] * u[k];
     force_velocity += f[k] * v_new;
+    v[k] = v_new;
+    u[k] += dt * v_new;
+    f[k] = 0.0;
+  }
+  for (Index k = owned; k < n; ++k) {  // ghosts of a distributed run: updated, not counted
+    const double v_new = scale * (damped * v[k] + h * inverse_mass[k] * f[k]);
     v[k] = v_new;
     u[k] += dt * v_new;
     f[k] = 0.0;

@@ -17,6 +17,9 @@ class SecondOrderSystem {
  public:
   virtual ~SecondOrderSystem() = default;
   virtual Index n_dofs() const = 0;
+  /// DOFs that the step sums count: the first n_owned() (a rank's owned DOFs when a run is
+  /// distributed, transient::Distribution; the others are ghosts, updated but not counted).
+  virtual Index n_owned() const { return n_dofs(); }
   /// Diagonal of M per DOF [kg]; 0 at held (Dirichlet) DOFs.
   virtual const VectorX& mass() const = 0;
   /// Diagonal of M^{-1} per DOF; 0 at held DOFs, which therefore never move.
@@ -29,7 +32,7 @@ class SecondOrderSystem {
   virtual void add_force(const ForceInput& input, VectorX& force) = 0;
 };
 
-/// Sums over all DOFs that one step computes in passing (no extra pass over memory), for the
+/// Sums over the counted DOFs (SecondOrderSystem::n_owned) that one step computes in passing (no extra pass over memory), for the
 /// energy balance. h = (dt_previous + dt)/2.
 struct StepSums {
   double kinetic_half = 0.0;        ///< \f$\tfrac12 V_{i+1/2}^T M V_{i+1/2}\f$ [J]

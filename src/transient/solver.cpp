@@ -19,11 +19,13 @@ namespace {
 /// K plus the springs of the terms that bound the stable step (every contact spring closed).
 class StableStepOperator final : public fem::LinearOperator {
  public:
-  StableStepOperator(const fem::LinearOperator& stiffness, const std::vector<std::shared_ptr<fem::ForceTerm>>& terms)
-      : stiffness_(stiffness), terms_(terms) {}
+  StableStepOperator(const fem::LinearOperator& stiffness, const std::vector<std::shared_ptr<fem::ForceTerm>>& terms,
+                     const Distribution* distribution)
+      : stiffness_(stiffness), terms_(terms), distribution_(distribution) {}
   Index n_rows() const override { return stiffness_.n_rows(); }
   void apply(const VectorX& x, VectorX& y) const override {
     stiffness_.apply(x, y);
+    if (distribution_) distribution_->complete(y);  // element shares summed; the pair springs are pointwise
     for (const auto& term : terms_) term->add_stiffness_bound(x, y);
   }
   void apply_add(double scale, const VectorX& x, VectorX& y) const override {
@@ -35,6 +37,7 @@ class StableStepOperator final : public fem::LinearOperator {
  private:
   const fem::LinearOperator& stiffness_;
   const std::vector<std::shared_ptr<fem::ForceTerm>>& terms_;
+  const Distribution* distribution_;
 };
 
 /// A term's dot products with U(i) and V(i-1/2) from its add_force, and its time.
@@ -42,6 +45,9 @@ struct TermRecord {
   double dot_displacement = 0.0;
   double dot_velocity = 0.0;
   double dot_velocity_new = 0.0;  ///< with V(i+1/2), after the step
+  double stored = 0.0;            ///< stored_energy() after the step
+  double dissipated = 0.0;        ///< dissipated_energy() after the step
+  double active = 0.0;            ///< active_fraction() after the step
   double seconds = 0.0;
 };
 
@@ -71,6 +77,11 @@ struct TransientSolver::Impl final : SecondOrderSystem {
   EnergyHistory energy_history;
 
   Index n_dofs() const override { return system->n_dofs(); }
+  Index n_owned() const override { return distribution ? distribution->n_owned_dofs() : n_dofs(); }
+  const Distribution* distribution = nullptr;
+  /// Terms before this index add element shares (damping, loads); the halo completes the force
+  /// after them, before the plugged-in pointwise terms (distributed runs only).
+  std::size_t halo_before = 0;
   const VectorX& mass() const override { return moving_mass; }
   const VectorX& inverse_mass() const override { return inverse; }
   double mass_damping() const override { return options.damping.alpha; }
@@ -78,17 +89,19 @@ struct TransientSolver::Impl final : SecondOrderSystem {
   void add_force(const fem::StepInput& input, VectorX& force) override {
     elastic->apply_add(-1.0, input.displacement, force);  // -K U, eq. (25a)
     for (std::size_t k = 0; k < terms.size(); ++k) {
+      if (distribution && k == halo_before) distribution->complete(force);
       const Stopwatch watch;
       terms[k]->add_force(input, force);
       records[k].dot_displacement = terms[k]->force_dot(input.displacement);
       records[k].dot_velocity = terms[k]->force_dot(input.velocity);
       records[k].seconds += watch.seconds();
     }
+    if (distribution && halo_before == terms.size()) distribution->complete(force);
   }
 
   void warn(const std::string& text) {
     summary.warnings.push_back(text);
-    if (options.progress) std::fprintf(stderr, "transient: warning: %s\n", text.c_str());
+    if (options.progress && (!distribution || distribution->rank() == 0)) std::fprintf(stderr, "transient: warning: %s\n", text.c_str());
   }
 
   void check_options() const;
@@ -96,7 +109,10 @@ struct TransientSolver::Impl final : SecondOrderSystem {
   void add_terms();
   void choose_time_step();
   void set_initial_state();
-  void record_probes(Index i, const std::vector<double>& before, std::vector<double>& sample, double time);
+  void probe_sample(Index i, const std::vector<double>& before, std::vector<double>& sample) const;
+  void record_probes(Index i, const std::vector<double>& sample, double time);
+  void record_terms();
+  void sum_over_ranks(std::vector<double>& sample, StepSums& sums, bool with_sums);
   void progress_line(Index i, double elapsed, const std::string& note) const;
   void integrate(const TransientCallbacks& callbacks);
 };
@@ -140,6 +156,7 @@ void TransientSolver::Impl::add_terms() {
   if (problem.terms.size() > 1 && problem.terms[problem.terms.size() - 2]->needs_other_forces()) {
     throw InputError("transient: at most one force term may need the other forces of the step");
   }
+  halo_before = terms.size();
   terms.insert(terms.end(), problem.terms.begin(), problem.terms.end());
   records.assign(terms.size(), TermRecord{});
 }
@@ -152,7 +169,13 @@ void TransientSolver::Impl::choose_time_step() {
   VectorX probe = VectorX::Ones(n_dofs()), bound = VectorX::Zero(n_dofs());
   for (const auto& term : terms) term->add_stiffness_bound(probe, bound);
   bounded_by_terms = bound.squaredNorm() > 0.0;
-  estimate = estimate_time_step(StableStepOperator(*elastic, terms), inverse, beta, o.time_step_options);
+  if (distribution) {
+    std::vector<double> any{bounded_by_terms ? 1.0 : 0.0};
+    distribution->sum(any);
+    bounded_by_terms = any[0] > 0.0;
+  }
+  estimate = estimate_time_step(StableStepOperator(*elastic, terms, distribution), inverse, beta,
+                                o.time_step_options, distribution);
   if (o.time_step > 0.0 && o.time_step > estimate.dt_critical) {
     const std::string text = "time step " + format_number(o.time_step) + " s is above the stable limit dt_critical = " +
                              format_number(estimate.dt_critical) + " s (omega_max = " +
@@ -212,6 +235,16 @@ void TransientSolver::Impl::setup() {
   elastic = &system->stiffness();
   const fem::Constraints& constraints = system->constraints();
   moving_mass = system->lumped_mass();  // eq. (27)
+  distribution = problem.distribution.get();
+  if (distribution) {
+    distribution->complete(moving_mass);  // shares of the elements of every rank
+    for (Index k = 0; k < n_dofs(); ++k) {
+      if (!(moving_mass[k] > 0.0)) {
+        throw InputError("lumped mass " + format_number(moving_mass[k]) + " of local DOF " + std::to_string(k) +
+                         " is not positive (material density <= 0, or a node outside every element)");
+      }
+    }
+  }
   inverse = moving_mass.cwiseInverse();
   for (Index k = 0; k < n_dofs(); ++k) {
     if (constraints.fixed[k]) moving_mass[k] = inverse[k] = 0.0;
@@ -219,6 +252,11 @@ void TransientSolver::Impl::setup() {
   add_terms();
   const mesh::Mesh& mesh = system->mesh();
   for (const Probe& probe : problem.probes) {
+    if (distribution && probe.node == -1) {  // owned by another rank: this rank adds zeros
+      for (int c = 0; c < 3; ++c) probe_dofs.push_back(-1);
+      probe_history.names.push_back(probe.name);
+      continue;
+    }
     if (probe.node < 0 || probe.node >= mesh.n_nodes()) {
       throw InputError("probe '" + probe.name + "': node " + std::to_string(probe.node) + " outside a mesh of " +
                        std::to_string(mesh.n_nodes()) + " nodes");
@@ -234,25 +272,75 @@ void TransientSolver::Impl::setup() {
   summary.dt_critical = estimate.dt_critical;
   summary.omega_max = estimate.omega_max;
   summary.damping = options.damping;
-  summary.n_dofs = n_dofs();
-  summary.n_elements = mesh.n_elements();
+  summary.n_dofs = distribution ? distribution->n_global_dofs() : n_dofs();
+  std::vector<double> elements{static_cast<double>(mesh.n_elements())};
+  if (distribution) {
+    summary.ranks = distribution->ranks();
+    elements.resize(distribution->ranks(), 0.0);
+    std::swap(elements[0], elements[distribution->rank()]);
+    distribution->sum(elements);  // elements per rank
+  }
+  summary.elements_min = static_cast<Index>(*std::min_element(elements.begin(), elements.end()));
+  summary.elements_max = static_cast<Index>(*std::max_element(elements.begin(), elements.end()));
+  double total_elements = 0.0;
+  for (double count : elements) total_elements += count;
+  summary.n_elements = static_cast<Index>(total_elements);
   summary.kernel = elastic->info().kernel;
   summary.setup_s = watch.seconds();
 }
 
-void TransientSolver::Impl::record_probes(Index i, const std::vector<double>& before, std::vector<double>& sample,
-                                          double time) {
+void TransientSolver::Impl::probe_sample(Index i, const std::vector<double>& before, std::vector<double>& sample) const {
   const Index n_probes = static_cast<Index>(problem.probes.size());
   const double h = i == 0 ? 0.5 * dt : dt;
   for (Index p = 0; p < n_probes; ++p) {
     for (int c = 0; c < 3; ++c) {
       const Index k = 3 * p + c;
-      const double v_old = before[3 * n_probes + k], v_new = velocity[probe_dofs[k]];
+      const double v_old = before[3 * n_probes + k], v_new = probe_dofs[k] >= 0 ? velocity[probe_dofs[k]] : 0.0;
       sample[9 * p + c] = before[k];
       sample[9 * p + 3 + c] = i == 0 ? v_old : 0.5 * (v_old + v_new);
       sample[9 * p + 6 + c] = (v_new - v_old) / h;
     }
   }
+}
+
+void TransientSolver::Impl::record_terms() {
+  for (std::size_t k = 0; k < terms.size(); ++k) {
+    TermRecord& record = records[k];
+    record.dot_velocity_new = terms[k]->force_dot(velocity);
+    record.stored = terms[k]->stored_energy();
+    record.dissipated = terms[k]->dissipated_energy();
+    record.active = terms[k]->active_fraction();
+  }
+}
+
+void TransientSolver::Impl::sum_over_ranks(std::vector<double>& sample, StepSums& sums, bool with_sums) {
+  // One reduction per step: the probe rows (zeros from the ranks that do not own a probe), the
+  // terms' dot products and energies, and the step sums when the step computed them.
+  std::vector<double> values(sample);
+  for (const TermRecord& r : records) {
+    values.insert(values.end(), {r.dot_displacement, r.dot_velocity, r.dot_velocity_new, r.stored, r.dissipated, r.active});
+  }
+  if (with_sums) {
+    values.insert(values.end(), {sums.kinetic_half, sums.kinetic_mid, sums.force_displacement, sums.force_velocity,
+                                 sums.mass_damping_dissipation});
+  }
+  distribution->sum(values);
+  std::size_t next = sample.size();
+  std::copy(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(next), sample.begin());
+  for (TermRecord& r : records) {
+    for (double* field : {&r.dot_displacement, &r.dot_velocity, &r.dot_velocity_new, &r.stored, &r.dissipated, &r.active}) {
+      *field = values[next++];
+    }
+  }
+  if (with_sums) {
+    for (double* field : {&sums.kinetic_half, &sums.kinetic_mid, &sums.force_displacement, &sums.force_velocity,
+                          &sums.mass_damping_dissipation}) {
+      *field = values[next++];
+    }
+  }
+}
+
+void TransientSolver::Impl::record_probes(Index i, const std::vector<double>& sample, double time) {
   if (i % options.probe_interval == 0) {
     probe_history.time.push_back(time);
     for (std::size_t c = 0; c < sample.size(); ++c) probe_history.values[c].push_back(sample[c]);
@@ -278,10 +366,9 @@ class EnergyBalance {
 
   /// After step i: the terms' work over [t_{i-1/2}, t_{i+1/2}] (from the second step) and the
   /// mass-proportional damping of the integrator.
-  void add_step_work(Index i, double dt, const VectorX& velocity, const StepSums& sums, double alpha) {
+  void add_step_work(Index i, double dt, const StepSums& sums, double alpha) {
     double external_new = 0.0, external_old = 0.0;
     for (std::size_t k = 0; k < terms_.size(); ++k) {
-      records_[k].dot_velocity_new = terms_[k]->force_dot(velocity);
       if (terms_[k]->role() == fem::EnergyRole::external) {
         external_old += records_[k].dot_velocity;
         external_new += records_[k].dot_velocity_new;
@@ -315,12 +402,11 @@ class EnergyBalance {
     // strain energy, those of U(i+1) as they are.
     double stored = 0.0, stored_modified = 0.0, internal = 0.0;
     for (std::size_t k = 0; k < terms_.size(); ++k) {
-      internal += terms_[k]->dissipated_energy();
+      internal += records_[k].dissipated;
       if (terms_[k]->role() != fem::EnergyRole::potential) continue;
-      stored += terms_[k]->stored_energy();
-      stored_modified += terms_[k]->explicit_in_time()
-                             ? terms_[k]->stored_energy() - 0.5 * dt * records_[k].dot_velocity_new
-                             : terms_[k]->stored_energy();
+      stored += records_[k].stored;
+      stored_modified += terms_[k]->explicit_in_time() ? records_[k].stored - 0.5 * dt * records_[k].dot_velocity_new
+                                                       : records_[k].stored;
     }
     const double modified = sums.kinetic_half + strain - 0.5 * dt * rest_velocity + stored_modified;
     const double kinetic = i == 0 ? kinetic_initial_ : sums.kinetic_mid;
@@ -370,7 +456,11 @@ void TransientSolver::Impl::integrate(const TransientCallbacks& callbacks) {
   CentralDifference integrator(n_dofs());
   StepSums sums;
   std::vector<double> sample(9 * n_probes), before(6 * n_probes);
-  EnergyBalance balance(terms, records, 0.5 * velocity.cwiseProduct(moving_mass).dot(velocity));
+  const Index owned = n_owned();
+  std::vector<double> kinetic_initial{
+      0.5 * velocity.head(owned).cwiseProduct(moving_mass.head(owned)).dot(velocity.head(owned))};
+  if (distribution) distribution->sum(kinetic_initial);
+  EnergyBalance balance(terms, records, kinetic_initial[0]);
   double active_sum = 0.0, last_progress = 0.0;
   for (TermRecord& record : records) record.seconds = 0.0;
   summary.n_threads = omp_get_max_threads();
@@ -380,14 +470,17 @@ void TransientSolver::Impl::integrate(const TransientCallbacks& callbacks) {
     const double time = static_cast<double>(i) * dt;
     const bool sample_energy = i % o.energy_interval == 0 || i + 1 == steps;
     for (Index k = 0; k < 3 * n_probes; ++k) {
-      before[k] = displacement[probe_dofs[k]];
-      before[3 * n_probes + k] = velocity[probe_dofs[k]];
+      before[k] = probe_dofs[k] >= 0 ? displacement[probe_dofs[k]] : 0.0;
+      before[3 * n_probes + k] = probe_dofs[k] >= 0 ? velocity[probe_dofs[k]] : 0.0;
     }
-    integrator.step(*this, time, i == 0 ? 0.0 : dt, dt, displacement, velocity,
-                    sample_energy || o.damping.alpha > 0.0 ? &sums : nullptr);
-    record_probes(i, before, sample, time);
-    balance.add_step_work(i, dt, velocity, sums, o.damping.alpha);
-    for (const auto& term : terms) active_sum += term->active_fraction();
+    const bool with_sums = sample_energy || o.damping.alpha > 0.0;
+    integrator.step(*this, time, i == 0 ? 0.0 : dt, dt, displacement, velocity, with_sums ? &sums : nullptr);
+    record_terms();
+    probe_sample(i, before, sample);
+    if (distribution) sum_over_ranks(sample, sums, with_sums);
+    record_probes(i, sample, time);
+    balance.add_step_work(i, dt, sums, o.damping.alpha);
+    for (const TermRecord& record : records) active_sum += record.active;
 
     if (sample_energy) {
       const double relative = balance.sample(i, time, dt, sums, energy_history);
@@ -420,7 +513,7 @@ void TransientSolver::Impl::integrate(const TransientCallbacks& callbacks) {
         break;
       }
     }
-    if (o.progress && (i & 63) == 63 && wall.seconds() - last_progress >= o.progress_interval) {
+    if (o.progress && (!distribution || distribution->rank() == 0) && (i & 63) == 63 && wall.seconds() - last_progress >= o.progress_interval) {
       last_progress = wall.seconds();
       progress_line(i, last_progress, callbacks.progress_note ? callbacks.progress_note(last_progress) : "");
     }
@@ -429,7 +522,7 @@ void TransientSolver::Impl::integrate(const TransientCallbacks& callbacks) {
   summary.wall_s = wall.seconds();
   for (std::size_t k = 0; k < terms.size(); ++k) summary.term_seconds[terms[k]->name()] += records[k].seconds;
   summary.ns_per_dof_step =
-      summary.steps > 0 ? 1e9 * summary.wall_s / (static_cast<double>(summary.steps) * n_dofs()) : 0.0;
+      summary.steps > 0 ? 1e9 * summary.wall_s / (static_cast<double>(summary.steps) * summary.n_dofs) : 0.0;
 }
 
 TransientSolver::TransientSolver(std::shared_ptr<const fem::System> system, TransientProblem problem,
@@ -443,7 +536,8 @@ TransientSolver::TransientSolver(const mesh::Mesh& mesh, TransientProblem proble
     : impl_(std::make_unique<Impl>(std::move(problem), std::move(options))) {
   const Impl& impl = *impl_;
   impl_->system = std::make_shared<fem::System>(mesh, impl.problem.materials, impl.problem.dirichlet,
-                                                impl.options.variant, impl.options.elastic);
+                                                impl.options.variant, impl.options.elastic,
+                                                impl.problem.distribution != nullptr);
   impl_->setup();
 }
 
@@ -543,6 +637,8 @@ nlohmann::json transient_json(const TransientSummary& summary) {
   json["dofs"] = summary.n_dofs;
   json["elements"] = summary.n_elements;
   json["threads"] = summary.n_threads;
+  json["ranks"] = summary.ranks;
+  json["elements_per_rank"] = {{"min", summary.elements_min}, {"max", summary.elements_max}};
   json["kernel"] = summary.kernel;
   json["warnings"] = summary.warnings;
   return json;

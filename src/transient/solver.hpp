@@ -29,6 +29,7 @@
 #include "fem/force_term.hpp"
 #include "fem/system.hpp"
 #include "transient/damping.hpp"
+#include "transient/distribution.hpp"
 #include "transient/excitation.hpp"
 #include "transient/time_step.hpp"
 
@@ -80,6 +81,13 @@ struct TransientProblem {
   /// Force terms plugged in from outside (the crack contact), over the system's DOFs; evaluated
   /// after the damping and the loads, a term that needs the other forces last.
   std::vector<std::shared_ptr<fem::ForceTerm>> terms;
+  /// Null: one process. Otherwise the run is this rank's share of a distributed run: the system is
+  /// the rank's local mesh (its elements; owned nodes first, then ghosts), the initial fields are
+  /// over its local DOFs, a probe whose node another rank owns has node -1, loads are placed on the
+  /// rank's own faces (their shares are summed by the halo), and the plugged-in terms are pointwise
+  /// over pairs of local nodes (evaluated after the halo completed the other forces, on owned and
+  /// ghost pairs alike; their sums count owned pairs only). All ranks call run() together.
+  std::shared_ptr<const Distribution> distribution;
 };
 
 /// Probe rows: times and, per probe, 9 columns u_x..u_z [m], v_x..v_z [m/s], a_x..a_z [m/s^2] at t_i.
@@ -122,6 +130,9 @@ struct TransientSummary {
   Index n_dofs = 0;
   Index n_elements = 0;
   int n_threads = 1;
+  int ranks = 1;                   ///< MPI ranks of a distributed run
+  Index elements_min = 0;          ///< fewest elements of a rank (the partition's balance)
+  Index elements_max = 0;          ///< most elements of a rank
   std::string kernel;
   std::vector<std::string> warnings;
 };

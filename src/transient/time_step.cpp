@@ -15,21 +15,34 @@ double critical_time_step(double omega_max, double beta) {
 }
 
 TimeStepEstimate estimate_time_step(const fem::LinearOperator& stiffness, const VectorX& inverse_mass, double beta,
-                                    const TimeStepOptions& options) {
+                                    const TimeStepOptions& options, const Distribution* distribution) {
   if (!(options.safety_factor > 0.0 && options.safety_factor <= 1.0) || !(options.margin >= 0.0)) {
     throw InputError("time step: expected 0 < safety_factor <= 1 and margin >= 0, got safety_factor = " +
                      format_number(options.safety_factor) + ", margin = " + format_number(options.margin));
   }
   const Index n = static_cast<Index>(inverse_mass.size());
+  // Sums count the owned DOFs [0, owned) and add over the ranks.
+  const Index owned = distribution ? distribution->n_owned_dofs() : n;
+  const auto global_sums = [&](std::vector<double> values) {
+    if (distribution) distribution->sum(values);
+    return values;
+  };
   const VectorX scale = inverse_mass.cwiseMax(0.0).cwiseSqrt();
-  // Deterministic pseudo-random start on the moving DOFs.
+  // Deterministic pseudo-random start on the moving DOFs, a function of the global DOF.
   VectorX q(n);
-  std::uint64_t state = 0x9E3779B97F4A7C15ULL;
-  for (Index k = 0; k < n; ++k) {
-    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-    q[k] = scale[k] > 0.0 ? static_cast<double>(state >> 11) / 9007199254740992.0 - 0.5 : 0.0;
+  {
+    const Index n_global = distribution ? distribution->n_global_dofs() : n;
+    std::vector<double> sequence(n_global);
+    std::uint64_t state = 0x9E3779B97F4A7C15ULL;
+    for (Index k = 0; k < n_global; ++k) {
+      state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+      sequence[k] = static_cast<double>(state >> 11) / 9007199254740992.0 - 0.5;
+    }
+    for (Index k = 0; k < n; ++k) {
+      q[k] = scale[k] > 0.0 ? sequence[distribution ? distribution->global_dofs()[k] : k] : 0.0;
+    }
   }
-  const double start_norm = q.norm();
+  const double start_norm = std::sqrt(global_sums({q.head(owned).squaredNorm()})[0]);
   if (!(start_norm > 0.0)) throw InputError("time step: every degree of freedom is held, nothing can move");
   q /= start_norm;
   // Three fused passes per iteration (the iteration is memory-bound on large meshes).
@@ -44,14 +57,16 @@ TimeStepEstimate estimate_time_step(const fem::LinearOperator& stiffness, const 
 #pragma omp parallel for schedule(static) reduction(+ : a) if (n > 100000)
     for (Index k = 0; k < n; ++k) {
       w[k] = scale[k] * product[k] - b_previous * q_previous[k];
-      a += w[k] * q[k];
+      if (k < owned) a += w[k] * q[k];
     }
+    if (distribution) a = global_sums({a})[0];
     double norm_squared = 0.0;
 #pragma omp parallel for schedule(static) reduction(+ : norm_squared) if (n > 100000)
     for (Index k = 0; k < n; ++k) {
       w[k] -= a * q[k];
-      norm_squared += w[k] * w[k];
+      if (k < owned) norm_squared += w[k] * w[k];
     }
+    if (distribution) norm_squared = global_sums({norm_squared})[0];
     const double b = std::sqrt(norm_squared);
     diagonal.push_back(a);
     const bool exhausted = !(b > 1e-14 * std::abs(a));

@@ -5,6 +5,7 @@
 #include "core/defaults.hpp"
 #include "core/types.hpp"
 #include "fem/operator.hpp"
+#include "transient/distribution.hpp"
 
 namespace crackle::transient {
 
@@ -32,7 +33,10 @@ double critical_time_step(double omega_max, double beta);
 /// by the Lanczos iteration (no reorthogonalisation: its largest Ritz value never exceeds the
 /// largest eigenvalue, and converges much faster than the power iteration), from a fixed
 /// pseudo-random start. K (symmetric positive semi-definite, over all DOFs) should include the contact springs all closed. InputError if no DOF moves.
+/// With a distribution the vectors are a rank's local DOFs, `stiffness` returns completed products,
+/// the start is the same function of the global DOF and the dot products are summed over the
+/// ranks (distributed Lanczos: every rank finds the same omega_max up to summation order).
 TimeStepEstimate estimate_time_step(const fem::LinearOperator& stiffness, const VectorX& inverse_mass, double beta,
-                                    const TimeStepOptions& options = {});
+                                    const TimeStepOptions& options = {}, const Distribution* distribution = nullptr);
 
 }  // namespace crackle::transient
