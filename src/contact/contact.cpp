@@ -213,14 +213,14 @@ Vec3 PenaltyContact::total_force() const {
   return total;
 }
 
-void PenaltyContact::add_closed_stiffness(const VectorX& x, VectorX& y) const {
+void PenaltyContact::add_closed_stiffness(const VectorX& x, VectorX& y, double scale) const {
   const bool friction = has_friction();
   for (const Pair& pair : pairs_) {
     const Vec3 relative = x.segment<3>(pair.minus_dof) - x.segment<3>(pair.plus_dof);
     const double normal_part = relative.dot(pair.normal);
     Vec3 spring = penalty_.normal_penalty * normal_part * pair.normal;
     if (friction) spring += penalty_.tangential_penalty * (relative - normal_part * pair.normal);
-    spring *= pair.area;
+    spring *= scale * pair.area;
     y.segment<3>(pair.minus_dof) += spring;
     y.segment<3>(pair.plus_dof) -= spring;
   }
