@@ -133,15 +133,18 @@ void PenaltyContact::add_force(const VectorX& displacement, VectorX& force) {
     const double pressure = penalty_pressure(gap, normal_penalty);        // eq. (25d)
     Vec3 traction = pressure * pair.normal;
     stored += pair.area * normal_penalty_energy(gap, normal_penalty);
+    pair.state = 0;
     if (gap < 0.0) {
       ++closed;
       closed_area += pair.area;
+      pair.state = 2;
     }
     if (friction) {
       const CoulombUpdate update = coulomb_return_mapping(pair.traction, relative - pair.previous_relative, pair.normal,
                                                           tangential_penalty, mu, pressure);  // eq. (15)
       pair.traction = update.traction;
       if (update.slipping && pressure > 0.0) ++slipping;
+      if (gap < 0.0 && !update.slipping) pair.state = 1;
       dissipated += pair.area * update.dissipation;
       stored += pair.area * tangential_penalty_energy(update.traction, tangential_penalty);
       traction += update.traction;
@@ -192,10 +195,12 @@ void PenaltyContact::add_implicit_force(const VectorX& displacement, const Vecto
     stored += pair.area * (normal_penalty_energy(response.gap, normal_penalty) +
                            tangential_penalty_energy(response.traction, tangential_penalty));
     dissipated += pair.area * response.dissipation;
+    pair.state = 0;
     if (response.gap < 0.0) {
       ++closed;
       closed_area += pair.area;
       if (response.slipping) ++slipping;
+      pair.state = response.slipping || !(mu > 0.0) ? 2 : 1;
     }
   }
   finish_step(stored, dissipated, closed, closed_area, slipping);
@@ -205,6 +210,13 @@ double PenaltyContact::force_dot(const VectorX& x) const {
   double sum = 0.0;
   for (const Pair& pair : pairs_) sum += pair.force.dot(x.segment<3>(pair.minus_dof) - x.segment<3>(pair.plus_dof));
   return sum;
+}
+
+Index PenaltyContact::find_pair(Index plus_dof) const {
+  for (std::size_t k = 0; k < pairs_.size(); ++k) {
+    if (pairs_[k].plus_dof == plus_dof) return static_cast<Index>(k);
+  }
+  return -1;
 }
 
 Vec3 PenaltyContact::total_force() const {

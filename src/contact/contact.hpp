@@ -135,6 +135,11 @@ class PenaltyContact {
   Index n_slipping() const { return n_slipping_; }
   /// Total contact force on the minus face at the last step [N].
   Vec3 total_force() const;
+  /// The split pair whose plus node has DOF `plus_dof` (x component), or -1.
+  Index find_pair(Index plus_dof) const;
+  /// Contact state of pair k at the last step: 0 open (g_N >= 0), 1 closed and sticking, 2 closed
+  /// and slipping (always 2 when closed without friction: the faces slide freely).
+  int pair_state(Index k) const { return pairs_[k].state; }
 
   /// y += K_c x for every pair closed and sticking: normal springs \f$\varepsilon_N A\, n\otimes n\f$
   /// plus, with friction, tangential ones \f$\varepsilon_T A (I - n\otimes n)\f$. The stiffest
@@ -150,6 +155,7 @@ class PenaltyContact {
     Vec3 traction = Vec3::Zero();           ///< tangential traction on minus [Pa]
     Vec3 previous_relative = Vec3::Zero();  ///< u_minus - u_plus where the last step left it
     Vec3 force = Vec3::Zero();              ///< force on minus at the last step [N]
+    int state = 0;                          ///< as pair_state()
   };
   void finish_step(double stored, double dissipated, Index closed, double closed_area, Index slipping);
 
