@@ -41,8 +41,9 @@ inline constexpr double kDefaultExplicitPenaltyFactor = defaults::kExplicitPenal
 
 /// Explicit pair springs enter the stable step's omega_max at this many times their own
 /// spring-mass frequency (their stiffness times its square): dt <= 0.9 x 2 / (4 omega_pair) =
-/// 0.45 / omega_pair, about 14 steps per spring period. Measured on the plucked cantilever (20 closures,
-/// penalties 0.01-100 x the explicit auto): 2 diverges at 100 x, 4 keeps every run below 2e-3.
+/// 0.45 / omega_pair, about 14 steps per spring period. Measured on plucked cantilevers (20+ closures,
+/// penalties 0.01-100 x the explicit auto, docs/benchmarks.md section 4): with 2 the runs at 100 x
+/// (and at 10 x on the deep beam) still diverge; with 4 every energy error stays below 6e-3.
 inline constexpr double kExplicitSpringResolution = 4.0;
 
 enum class ContactIntegration {

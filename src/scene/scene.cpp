@@ -157,7 +157,9 @@ Param build_parameters() {
         choice("integration", "implicit: the penalty law at U(i+1), solved per pair in closed form, so the "
                               "springs do not limit the time step (auto penalty " +
                                   format_number(defaults::kImplicitPenaltyFactor) + " E/h); explicit: the force "
-                              "at U(i) as in MODEL.md eq. 27, the springs enter omega_max (auto penalty " +
+                              "at U(i) as in MODEL.md eq. 27, the springs enter omega_max at 4 times their own "
+                              "frequency so that contact events are resolved (stable at any penalty; steps grow as "
+                              "sqrt(penalty); auto penalty " +
                                   format_number(defaults::kExplicitPenaltyFactor) + " E/h).", {"implicit", "explicit"}).defaults_to("implicit"),
       }),
     }).optional_section(),

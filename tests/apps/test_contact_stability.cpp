@@ -20,19 +20,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// A deep steel cantilever 0.2 x 0.02 x 0.04 m (f1 about 740 Hz: 20 closures in 0.03 s), p = 1,
-/// [10, 1, 2] cells, a half-depth edge crack from the top face at x = 0.04, no damping.
+/// The deep cracked cantilever of cli_testing (f1 about 740 Hz), no damping.
 std::string scene_text(const std::string& integration, const std::string& penalty) {
-  return R"(mesh:
-  box: {size: [0.2, 0.02, 0.04], cells: [10, 1, 2], order: 1}
-material: {E: 210.0e9, nu: 0.3, rho: 7850.0}
-boundary:
-  - {face: x-, fix: [x, y, z]}
-crack:
-  plane: {normal: x, at: 0.04}
-  region: {y: [0.0, 0.02], z: [0.02, 0.04]}
-  contact: {integration: )" + integration + ", penalty: " + penalty + R"(}
-transient:
+  return cli_testing::deep_cracked_cantilever() + "  contact: {integration: " + integration + ", penalty: " + penalty +
+         "}\n" + R"(transient:
   release:
     static: {point: [0.2, 0.01, 0.04], direction: z, amplitude: 2000}
   duration: 0.032

@@ -19,20 +19,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// The deep cantilever of the stability test (f1 about 740 Hz), p = 1, a half-depth edge crack from
-/// the top face at x = 0.04 with friction and an initial gap, plucked by a static tip load.
+/// The deep cracked cantilever of cli_testing (f1 about 740 Hz) with friction and an initial gap,
+/// plucked by a static tip load.
 std::string scene_text(const std::string& probes, const std::string& extra = "") {
-  return R"(mesh:
-  box: {size: [0.2, 0.02, 0.04], cells: [10, 1, 2], order: 1}
-material: {E: 210.0e9, nu: 0.3, rho: 7850.0}
-boundary:
-  - {face: x-, fix: [x, y, z]}
-crack:
-  plane: {normal: x, at: 0.04}
-  region: {y: [0.0, 0.02], z: [0.02, 0.04]}
-  gap: 2.0e-7
-  contact: {friction: 0.3}
-transient:
+  return cli_testing::deep_cracked_cantilever() + "  gap: 2.0e-7\n  contact: {friction: 0.3}\n" + R"(transient:
   release:
     static: {point: [0.2, 0.01, 0.04], direction: z, amplitude: 2000}
   duration: 0.02
