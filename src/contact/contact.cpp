@@ -143,6 +143,7 @@ void PenaltyContact::add_force(const VectorX& displacement, VectorX& force) {
     Vec3 traction = pressure * pair.normal;
     const double counted = pair.counted ? 1.0 : 0.0;
     stored += counted * pair.area * normal_penalty_energy(gap, normal_penalty);
+    pair.state = gap < 0.0 ? 2 : 0;
     if (gap < 0.0 && pair.counted) {
       ++closed;
       closed_area += pair.area;
@@ -152,6 +153,7 @@ void PenaltyContact::add_force(const VectorX& displacement, VectorX& force) {
                                                           tangential_penalty, mu, pressure);  // eq. (15)
       pair.traction = update.traction;
       if (update.slipping && pressure > 0.0 && pair.counted) ++slipping;
+      if (gap < 0.0 && !update.slipping) pair.state = 1;
       dissipated += counted * pair.area * update.dissipation;
       stored += counted * pair.area * tangential_penalty_energy(update.traction, tangential_penalty);
       traction += update.traction;
@@ -203,10 +205,12 @@ void PenaltyContact::add_implicit_force(const VectorX& displacement, const Vecto
     stored += pair.area * (normal_penalty_energy(response.gap, normal_penalty) +
                            tangential_penalty_energy(response.traction, tangential_penalty));
     dissipated += pair.area * response.dissipation;
+    pair.state = 0;
     if (response.gap < 0.0) {
       ++closed;
       closed_area += pair.area;
       if (response.slipping) ++slipping;
+      pair.state = response.slipping || !(mu > 0.0) ? 2 : 1;
     }
   }
   finish_step(stored, dissipated, closed, closed_area, slipping);
@@ -220,6 +224,13 @@ double PenaltyContact::force_dot(const VectorX& x) const {
   return sum;
 }
 
+Index PenaltyContact::find_pair(Index plus_dof) const {
+  for (std::size_t k = 0; k < pairs_.size(); ++k) {
+    if (pairs_[k].plus_dof == plus_dof) return static_cast<Index>(k);
+  }
+  return -1;
+}
+
 Vec3 PenaltyContact::total_force() const {
   Vec3 total = Vec3::Zero();
   for (const Pair& pair : pairs_) {
@@ -228,14 +239,14 @@ Vec3 PenaltyContact::total_force() const {
   return total;
 }
 
-void PenaltyContact::add_closed_stiffness(const VectorX& x, VectorX& y) const {
+void PenaltyContact::add_closed_stiffness(const VectorX& x, VectorX& y, double scale) const {
   const bool friction = has_friction();
   for (const Pair& pair : pairs_) {
     const Vec3 relative = x.segment<3>(pair.minus_dof) - x.segment<3>(pair.plus_dof);
     const double normal_part = relative.dot(pair.normal);
     Vec3 spring = penalty_.normal_penalty * normal_part * pair.normal;
     if (friction) spring += penalty_.tangential_penalty * (relative - normal_part * pair.normal);
-    spring *= pair.area;
+    spring *= scale * pair.area;
     y.segment<3>(pair.minus_dof) += spring;
     y.segment<3>(pair.plus_dof) -= spring;
   }

@@ -13,9 +13,15 @@
 ///   not resolved). The price is a small numerical dissipation: the relative normal velocity of
 ///   a pair coming into contact is lost (an inelastic node impact, O(h)), and closed springs
 ///   dissipate O(1/eps_N). Measured: 0.5% of the energy over 1.1e5 steps of a breathing crack.
-/// - `explicit_forces`: the penalty law at U(i), as eq. (28) literally; the closed springs then
-///   enter the stable time step, and energy is only conserved when the time step resolves the
-///   pair-spring period (much smaller than the stability limit for a stiff penalty).
+/// - `explicit_forces`: the penalty law at U(i), as eq. (27) literally. Central differences at the
+///   springs' own stability limit (the pair spring-mass frequency equal to omega_max) are stable
+///   for a linear spring but not for one that switches on and off: an impact that lasts one or two
+///   steps gains or loses an O(1) share of the pair's energy, and chatter at the crack mouth pumps
+///   it until the energy check stops the run (docs/benchmarks.md section 4: every penalty >= 10 E/h
+///   at the first closure). So the closed springs enter omega_max at kExplicitSpringResolution
+///   times their own frequency: the step resolves the spring period with >= 14 steps (as
+///   LS-DYNA's and Abaqus' contact steps are chosen from the pair's own spring-mass frequency), at
+///   a cost of steps that grows as sqrt(eps_N).
 #include <vector>
 
 #include "core/defaults.hpp"
@@ -32,6 +38,13 @@ inline constexpr double kDefaultPenaltyFactor = defaults::kImplicitPenaltyFactor
 /// Default c with explicit pair springs: their frequency stays at that of the elements, so that
 /// they barely shrink the stable time step and central differences keep contact events stable.
 inline constexpr double kDefaultExplicitPenaltyFactor = defaults::kExplicitPenaltyFactor;
+
+/// Explicit pair springs enter the stable step's omega_max at this many times their own
+/// spring-mass frequency (their stiffness times its square): dt <= 0.9 x 2 / (4 omega_pair) =
+/// 0.45 / omega_pair, about 14 steps per spring period. Measured on plucked cantilevers (20+ closures,
+/// penalties 0.01-100 x the explicit auto, docs/benchmarks.md section 4): with 2 the runs at 100 x
+/// (and at 10 x on the deep beam) still diverge; with 4 every energy error stays below 6e-3.
+inline constexpr double kExplicitSpringResolution = 4.0;
 
 enum class ContactIntegration {
   implicit,         ///< penalty law at U(i+1), closed form per pair (default)
@@ -133,11 +146,16 @@ class PenaltyContact {
   Index n_slipping() const { return n_slipping_; }
   /// Total contact force on the minus face at the last step [N].
   Vec3 total_force() const;
+  /// The split pair whose plus node has DOF `plus_dof` (x component), or -1.
+  Index find_pair(Index plus_dof) const;
+  /// Contact state of pair k at the last step: 0 open (g_N >= 0), 1 closed and sticking, 2 closed
+  /// and slipping (always 2 when closed without friction: the faces slide freely).
+  int pair_state(Index k) const { return pairs_[k].state; }
 
   /// y += K_c x for every pair closed and sticking: normal springs \f$\varepsilon_N A\, n\otimes n\f$
   /// plus, with friction, tangential ones \f$\varepsilon_T A (I - n\otimes n)\f$. The stiffest
-  /// contact state, for the stable time step of the explicit integration.
-  void add_closed_stiffness(const VectorX& x, VectorX& y) const;
+  /// contact state, for the stable time step of the explicit integration; times `scale`.
+  void add_closed_stiffness(const VectorX& x, VectorX& y, double scale = 1.0) const;
 
  private:
   struct Pair {
@@ -149,6 +167,7 @@ class PenaltyContact {
     Vec3 previous_relative = Vec3::Zero();  ///< u_minus - u_plus where the last step left it
     Vec3 force = Vec3::Zero();              ///< force on minus at the last step [N]
     bool counted = true;                    ///< in the sums (false: a ghost pair of another rank)
+    int state = 0;                          ///< as pair_state()
   };
   void finish_step(double stored, double dissipated, Index closed, double closed_area, Index slipping);
 

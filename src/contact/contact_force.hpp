@@ -11,7 +11,7 @@ namespace crackle::contact {
 /// PenaltyContact as a force term. Implicit integration (the default) evaluates the pair springs
 /// at U(i+1) through the integrator's velocity update carried by fem::StepInput, so it needs the
 /// other forces of the step and is evaluated last; explicit forces are those of U(i) and their
-/// closed springs bound the stable step.
+/// closed springs bound the stable step, resolved (kExplicitSpringResolution).
 class ContactForce final : public fem::ForceTerm {
  public:
   ContactForce(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const fem::Materials& materials,
@@ -47,7 +47,10 @@ class ContactForce final : public fem::ForceTerm {
     return contact_.total_area() > 0.0 ? contact_.closed_area() / contact_.total_area() : 0.0;
   }
   void add_stiffness_bound(const VectorX& x, VectorX& y) const override {
-    if (!contact_.implicit()) contact_.add_closed_stiffness(x, y);
+    // Explicit springs count at kExplicitSpringResolution times their frequency (contact.hpp).
+    if (!contact_.implicit()) {
+      contact_.add_closed_stiffness(x, y, kExplicitSpringResolution * kExplicitSpringResolution);
+    }
   }
   void start(const VectorX& displacement) override { contact_.reset(displacement); }
 

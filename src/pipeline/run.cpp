@@ -1,6 +1,7 @@
 /// \file `crackle run`: the whole pipeline of a scene, each stage only if the scene needs it:
 /// modal (only when something refers to a mode or the scene asks for modal output) -> transient
 /// (with contact only when there is a crack) -> spectrum (harmonics, damage indices, plots).
+#include <Eigen/Geometry>
 #include <cmath>
 #include <iomanip>
 #include <iostream>
@@ -94,10 +95,27 @@ std::vector<Index> nodes_in_range(const mesh::Mesh& mesh, const scene::InitialSe
 /// holds decimated rows; the amplitude spectra and the history plots take every step).
 struct ProbeSpectrum {
   std::string name;
+  std::string quantity;  ///< "u_x" ... or "gap" (an opening probe), for messages and plot titles
+  std::string label;     ///< spectrum.json's "component": the axis, or "gap"
   int component = 2;
   std::unique_ptr<spectral::HarmonicAccumulator> accumulator;
   std::vector<double> values;
 };
+
+/// The probe column the spectrum analyses: the normal gap (column 0) of an opening probe, else the
+/// probe's component or the default one.
+int analysed_component(const scene::ProbeSection& probe, int default_component) {
+  return probe.crack_opening ? 0 : probe.component >= 0 ? probe.component : default_component;
+}
+
+/// The analysed quantity's name in spectrum.json ("component": the axis, or "gap") and in messages
+/// ("u_x", or "gap").
+std::string analysed_label(const scene::ProbeSection& probe, int component) {
+  return probe.crack_opening ? "gap" : axis_name(component);
+}
+std::string analysed_quantity(const scene::ProbeSection& probe, int component) {
+  return probe.crack_opening ? "gap" : std::string("u_") + axis_name(component);
+}
 
 /// Where a point of the scene (a probe, a point force) acts: the nearest node, and how far it is.
 struct Placement {
@@ -233,6 +251,78 @@ void add_initial_fields(const scene::TransientSection& section, const Model& mod
   }
 }
 
+/// The split crack pair (not on the front) nearest `point`, or the one with `node` as a face node;
+/// nullptr if there is none.
+const mesh::CrackPair* nearest_split_pair(const mesh::Mesh& mesh, const Vec3& point, Index node = -1) {
+  const mesh::CrackPair* best = nullptr;
+  double best_distance = std::numeric_limits<double>::infinity();
+  for (const mesh::CrackPair& pair : mesh.crack_pairs) {
+    if (pair.on_front()) continue;
+    if (node >= 0) {
+      if (pair.plus == node || pair.minus == node) return &pair;
+      continue;
+    }
+    const double distance = (mesh.nodes[pair.plus] - point).norm();
+    if (distance < best_distance) {
+      best_distance = distance;
+      best = &pair;
+    }
+  }
+  return best;
+}
+
+/// A probe of the scene on the mesh: the nearest node (the chosen copy of a split crack node with
+/// `side`), or for crack_opening the nearest split crack pair with its frame (n+ and two tangents),
+/// g0 and, with contact, its contact state.
+transient::Probe place_probe(const scene::Scene& scene, const Model& model, const mesh::DofMap& dofs,
+                             const PointPlacer& placer, std::size_t index, const contact::ContactForce* contact) {
+  const scene::ProbeSection& probe = scene.transient->probes[index];
+  const std::string entry = "transient.probes[" + std::to_string(index) + "]";
+  const mesh::Mesh& mesh = model.mesh;
+  transient::Probe placed;
+  placed.name = probe.name;
+  if (!probe.crack_opening) {
+    placed.node = placer.place(probe.point, entry + ".point").node;
+    if (probe.side.empty()) return placed;
+    const mesh::CrackPair* pair = nearest_split_pair(mesh, probe.point, placed.node);
+    if (!pair) {
+      const Vec3& x = mesh.nodes[placed.node];
+      throw InputError(scene.where(entry + ".side") + ": expected a point on a crack face (side chooses a copy of a "
+                       "split crack node), got the nearest node " + std::to_string(placed.node) + " at (" +
+                       format_number(x[0]) + ", " + format_number(x[1]) + ", " + format_number(x[2]) +
+                       ") that is not split (off the crack or on its front)");
+    }
+    placed.node = probe.side == "upper" ? pair->minus : pair->plus;
+    return placed;
+  }
+  placer.place(probe.point, entry + ".crack_opening");  // inside the body
+  const mesh::CrackPair* pair = nearest_split_pair(mesh, probe.point);
+  if (!pair) {
+    throw InputError(scene.where(entry + ".crack_opening") + ": expected a crack with split pairs, got none (every "
+                     "crack node is on the front)");
+  }
+  if (dofs.dof(pair->minus, 0) == dofs.dof(pair->plus, 0)) {
+    throw InputError(scene.where(entry + ".crack_opening") + ": expected transient.variant: open (the crack faces "
+                     "are tied in the uncracked variant, so the opening is always zero)");
+  }
+  placed.node = pair->plus;
+  placed.minus_node = pair->minus;
+  const Vec3 normal = pair->normal.normalized();
+  Eigen::Index least = 0;
+  normal.cwiseAbs().minCoeff(&least);
+  const Vec3 tangent = (Vec3::Unit(least) - normal[least] * normal).normalized();
+  placed.frame.row(0) = normal.transpose();
+  placed.frame.row(1) = tangent.transpose();
+  placed.frame.row(2) = normal.cross(tangent).transpose();
+  placed.initial_gap = scene_contact_options(scene).initial_gap;
+  if (contact) {
+    const Index k = contact->contact().find_pair(dofs.dof(pair->plus, 0));
+    if (k >= 0) placed.state = [contact, k] { return contact->contact().pair_state(k); };
+    placed.state_at_step_end = contact->contact().implicit();
+  }
+  return placed;
+}
+
 TransientSetup transient_setup(const scene::Scene& scene, const Model& model,
                                const std::optional<modal::ModalResult>& modes, const RunCommandOptions& options) {
   const scene::TransientSection& section = *scene.transient;
@@ -261,22 +351,29 @@ TransientSetup transient_setup(const scene::Scene& scene, const Model& model,
   const PointPlacer placer(scene, model.mesh);
   for (std::size_t p = 0; p < section.probes.size(); ++p) {
     const scene::ProbeSection& probe = section.probes[p];
-    const Placement placement = placer.place(probe.point, "transient.probes[" + std::to_string(p) + "].point");
-    setup.problem.probes.push_back({probe.name, placement.node});
-    const Vec3& x = model.mesh.nodes[placement.node];
+    const transient::Probe placed = place_probe(scene, model, system.dofs(), placer, p, setup.contact.get());
+    setup.problem.probes.push_back(placed);
+    const Vec3& x = model.mesh.nodes[placed.node];
     setup.probes_json.push_back({{"name", probe.name},
                                  {"point", {probe.point[0], probe.point[1], probe.point[2]}},
-                                 {"node", placement.node},
+                                 {"node", placed.node},
                                  {"node_point", {x[0], x[1], x[2]}},
-                                 {"distance_m", placement.distance}});
+                                 {"distance_m", (x - probe.point).norm()}});
+    if (placed.opening()) {
+      setup.probes_json.back()["kind"] = "crack_opening";
+      setup.probes_json.back()["minus_node"] = placed.minus_node;
+      setup.probes_json.back()["normal"] = {placed.frame(0, 0), placed.frame(0, 1), placed.frame(0, 2)};
+      continue;
+    }
+    if (!probe.side.empty()) setup.probes_json.back()["side"] = probe.side;
     // A probe whose analysed component is held (a clamped face) has A1 = 0: its ratios are NaN.
     const int component = probe.component >= 0 ? probe.component
                           : section.excitation  ? section.excitation->direction
                                                 : -1;
     const fem::Constraints& constraints = system.constraints();
     for (int c = 0; c < 3; ++c) {
-      if (c != component || !constraints.fixed[system.dofs().dof(placement.node, c)]) continue;
-      setup.warnings.push_back("probe '" + probe.name + "' (node " + std::to_string(placement.node) + ") has its u_" +
+      if (c != component || !constraints.fixed[system.dofs().dof(placed.node, c)]) continue;
+      setup.warnings.push_back("probe '" + probe.name + "' (node " + std::to_string(placed.node) + ") has its u_" +
                                axis_name(c) + " held by a boundary condition: its response is the prescribed value" +
                                (scene.spectrum ? ", so A1 = 0 and its damage indices are undefined (NaN)" : ""));
     }
@@ -328,7 +425,9 @@ class SpectrumMonitor {
     for (const scene::ProbeSection& probe : section.probes) {
       ProbeSpectrum entry;
       entry.name = probe.name;
-      entry.component = probe.component >= 0 ? probe.component : section.excitation->direction;
+      entry.component = analysed_component(probe, section.excitation->direction);
+      entry.label = analysed_label(probe, entry.component);
+      entry.quantity = analysed_quantity(probe, entry.component);
       entry.accumulator = std::make_unique<spectral::HarmonicAccumulator>(options_, dt, 0.0);
       probes_.push_back(std::move(entry));
     }
@@ -431,8 +530,7 @@ void SpectrumMonitor::write(const scene::Scene& scene, const std::filesystem::pa
   for (std::size_t p = 0; p < probes_.size(); ++p) {
     const ProbeSpectrum& probe = probes_[p];
     const spectral::HarmonicTable table = probe.accumulator->last_table(used);
-    const std::string component = axis_name(probe.component);
-    probes_json[probe.name] = spectral::probe_json(component, table);
+    probes_json[probe.name] = spectral::probe_json(probe.label, table);
     const std::vector<double>& values = probe.values;
     spectral::SpectrumOptions spectrum_options;
     spectrum_options.excitation_frequency_hz = frequency;
@@ -441,14 +539,14 @@ void SpectrumMonitor::write(const scene::Scene& scene, const std::filesystem::pa
     const spectral::AmplitudeSpectrum amplitude = analyzer.amplitude_spectrum(values, sampling, spectrum_options);
     io::write_file_atomic(directory / ("spectrum_" + probe.name + ".csv"), spectral::spectrum_csv(amplitude, "m"));
     if (spectrum_.plots) {
-      plot.title = probe.name + " u_" + component;
+      plot.title = probe.name + " " + probe.quantity;
       const auto history_plot = spectral::plot_time_history(directory / ("history_" + probe.name + ".png"), values, sampling, plot);
       spectral::plot_spectrum(directory / ("spectrum_" + probe.name + ".png"), amplitude, frequency,
                               spectral::harmonic_orders(options_), plot);
       if (!history_plot.written) out << "note: no plots (" << history_plot.note << ")\n";
     }
     const spectral::DamageIndices indices = spectral::damage_indices(table);
-    out << "spectrum " << probe.name << " (u_" << component << "): A1 = " << table.amplitude(1) << " m, A2/A1 = "
+    out << "spectrum " << probe.name << " (" << probe.quantity << "): A1 = " << table.amplitude(1) << " m, A2/A1 = "
         << indices.a2_over_a1 << ", A3/A1 = " << indices.a3_over_a1;
     if (options_.subharmonics) out << ", A1/2/A1 = " << indices.a_half_over_a1;
     out << "\n";
@@ -555,10 +653,10 @@ void write_ringdown_spectrum(const scene::Scene& scene, const fs::path& director
   spectral::PlotOptions plot;
   for (std::size_t p = 0; p < section.probes.size(); ++p) {
     const scene::ProbeSection& probe = section.probes[p];
-    const int component = probe.component >= 0 ? probe.component : default_component;
-    const std::string axis = axis_name(component);
+    const int component = analysed_component(probe, default_component);
+    const std::string axis = axis_name(component), quantity = analysed_quantity(probe, component);
     const std::vector<double>& values = history.values[9 * p + component];
-    nlohmann::json probe_json = {{"component", axis}};
+    nlohmann::json probe_json = {{"component", analysed_label(probe, component)}};
     const spectral::RingdownAnalysis analysis = spectral::analyse_ringdown(values, sampling, options);
     nlohmann::json ringdown = spectral::ringdown_json(analysis);
     if (modes) {
@@ -566,7 +664,7 @@ void write_ringdown_spectrum(const scene::Scene& scene, const fs::path& director
       if (!comparison.is_null()) ringdown["modal_comparison"] = comparison;
     }
     probe_json["ringdown"] = ringdown;
-    out << "ringdown " << probe.name << " (u_" << axis << "): f = " << std::setprecision(8) << analysis.frequency_hz
+    out << "ringdown " << probe.name << " (" << quantity << "): f = " << std::setprecision(8) << analysis.frequency_hz
         << " Hz, damping ratio " << std::setprecision(4) << analysis.damping_ratio;
     if (ringdown.contains("modal_comparison")) {
       const nlohmann::json& comparison = ringdown["modal_comparison"];
@@ -584,7 +682,7 @@ void write_ringdown_spectrum(const scene::Scene& scene, const fs::path& director
     std::optional<spectral::FrequencyResponse> frf;
     if (pulse) frf = write_frf(directory, probe.name, values, history, sampling, *excitation, probe_json, out);
     if (spectrum.plots) {
-      plot.title = probe.name + " u_" + axis;
+      plot.title = probe.name + " " + quantity;
       const auto history_plot = spectral::plot_time_history(directory / ("history_" + probe.name + ".png"), values, sampling, plot);
       spectral::plot_ringdown_envelope(directory / ("ringdown_" + probe.name + ".png"), analysis, plot);
       if (frf) {
@@ -594,7 +692,7 @@ void write_ringdown_spectrum(const scene::Scene& scene, const fs::path& director
           for (int i = 0; i < variant->modes.n_modes(); ++i) reference.push_back(variant->modes.frequencies_hz[i]);
         }
         spectral::PlotOptions frf_plot = plot;
-        frf_plot.title = probe.name + ": H = u_" + axis + " / F_" + axis_name(excitation->direction);
+        frf_plot.title = probe.name + ": H = " + quantity + " / F_" + axis_name(excitation->direction);
         frf_plot.unit = "m/N";
         spectral::plot_frf(directory / ("frf_" + probe.name + ".png"), *frf, reference, frf_plot);
       }

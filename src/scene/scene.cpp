@@ -158,7 +158,9 @@ Param build_parameters() {
         choice("integration", "implicit: the penalty law at U(i+1), solved per pair in closed form, so the "
                               "springs do not limit the time step (auto penalty " +
                                   format_number(defaults::kImplicitPenaltyFactor) + " E/h); explicit: the force "
-                              "at U(i) as in MODEL.md eq. 27, the springs enter omega_max (auto penalty " +
+                              "at U(i) as in MODEL.md eq. 27, the springs enter omega_max at 4 times their own "
+                              "frequency so that contact events are resolved (stable at any penalty; steps grow as "
+                              "sqrt(penalty); auto penalty " +
                                   format_number(defaults::kExplicitPenaltyFactor) + " E/h).", {"implicit", "explicit"}).defaults_to("implicit"),
       }),
     }).optional_section(),
@@ -239,9 +241,18 @@ Param build_parameters() {
       list_of("probes", "Points whose displacement, velocity and acceleration are recorded (nearest node).", {
         text("name", "Name of the probe: letters, digits, _ . - (column prefix, file names, spectrum.json key).")
             .required(),
-        number("point", "Position.").with_unit("m").list(3).required(),
+        number("point", "Position: the displacement of the nearest node (give point or crack_opening).")
+            .with_unit("m").list(3),
+        choice("side", "For a point on a crack face: which copy of the split node to record, lower (coordinate "
+                       "below the crack plane: the plus face of MODEL.md eq. 9, the default nearest node) or "
+                       "upper (the minus face).", {"lower", "upper"}),
+        number("crack_opening", "Position: the crack pair nearest it (give point or crack_opening); records "
+                                "the normal gap g_N = g0 + (u- - u+) . n+ (eq. 9), the tangential slip along "
+                                "two tangents (eq. 10), their rates, and the contact state (0 open, 1 stick, 2 "
+                                "slip) as probes.csv columns; the spectrum analyses the gap.").with_unit("m").list(3),
         choice("component", "Component of the displacement analysed by the spectrum (default: the excitation "
-                            "direction); its unit is that of the harmonic amplitudes.", kAxes).with_unit("m"),
+                            "direction); its unit is that of the harmonic amplitudes. Not with crack_opening "
+                            "(its gap is analysed).", kAxes).with_unit("m"),
       }).defaults_to("[]"),
       map_of("release", "Free vibration: the run starts at rest from a deflected state (MODEL.md eq. 6), given "
                         "by exactly one of static and mode; added to `initial`.", {
@@ -589,7 +600,26 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
     ProbeSection probe;
     probe.name = values.word(entry + ".name");
     check_file_safe_name(values, entry + ".name", probe.name);
-    probe.point = vec3(values.numbers(entry + ".point"));
+    const std::string where = exactly_one(values, entry, {"point", "crack_opening"});
+    probe.point = vec3(values.numbers(entry + "." + where));
+    if (where == "crack_opening") {
+      probe.crack_opening = true;
+      if (!scene.has_crack()) values.fail(entry + ".crack_opening", "a scene with a crack", "a body without one");
+      if (values.has(entry + ".component")) {
+        values.fail(entry + ".component", "no component with crack_opening (its normal gap is analysed)",
+                    "'" + values.word(entry + ".component") + "'");
+      }
+      if (values.has(entry + ".side")) {
+        values.fail(entry + ".side", "no side with crack_opening (it records both faces)",
+                    "'" + values.word(entry + ".side") + "'");
+      }
+    }
+    if (values.has(entry + ".side")) probe.side = values.word(entry + ".side");
+    if (transient.model == "reduced" && (probe.crack_opening || !probe.side.empty())) {
+      const std::string key = entry + (probe.crack_opening ? ".crack_opening" : ".side");
+      values.fail(key, "a plain point probe with transient.model: reduced (its outputs are the displacements of "
+                       "nearest nodes; record the opening with transient.model: full)", "this key");
+    }
     if (values.has(entry + ".component")) probe.component = axis_index(values.word(entry + ".component"));
     for (const ProbeSection& earlier : transient.probes) {
       if (earlier.name == probe.name) values.fail(entry + ".name", "a name no other probe has", "'" + probe.name + "' again");
@@ -682,6 +712,13 @@ SweepFrequencySection sweep_end_from(const Values& values, const Scene& scene, c
 }
 
 SweepSection sweep_from(const Values& values, const Scene& scene) {
+  for (std::size_t i = 0; scene.transient && i < scene.transient->probes.size(); ++i) {
+    const ProbeSection& probe = scene.transient->probes[i];
+    if (!probe.crack_opening && probe.side.empty()) continue;
+    values.fail("transient.probes[" + std::to_string(i) + "]" + (probe.crack_opening ? ".crack_opening" : ".side"),
+                "a plain point probe in a scene with sweep: (the sweep's outputs are nearest-node displacements)",
+                "this key");
+  }
   if (!scene.transient || !scene.transient->excitation || scene.transient->excitation->kind != "harmonic") {
     values.fail("sweep", "a transient section with a harmonic excitation (its load shape and amplitude are swept)",
                 "none");
@@ -823,7 +860,8 @@ Scene scene_from(const Values& values) {
                                     "spectrum.harmonics"};
   if (scene.transient) {
     for (std::size_t i = 0; i < scene.transient->probes.size(); ++i)
-      named.push_back("transient.probes[" + std::to_string(i) + "].point");
+      for (const char* key : {"point", "crack_opening", "side"})
+        named.push_back("transient.probes[" + std::to_string(i) + "]." + key);
   }
   for (const std::string& key : named) {
     if (values.has(key)) scene.key_lines[key] = values.line(key);

@@ -108,6 +108,8 @@ struct ProbeSection {
   std::string name;
   Vec3 point = Vec3::Zero();
   int component = -1;  ///< -1: the excitation direction
+  bool crack_opening = false;  ///< the crack pair nearest `point` (gap, slip, state), not a node
+  std::string side;            ///< "", "lower" or "upper": which copy of a split crack node
 };
 
 /// One entry of `transient.initial`.

@@ -70,7 +70,24 @@ struct TransientSolver::Impl final : SecondOrderSystem {
   double dt = 0.0;
   Index steps = 0;
   VectorX displacement, velocity;
-  std::vector<Index> probe_dofs;
+  std::vector<Index> probe_dofs;        ///< 3 per probe: the node's (an opening probe's plus node); -1 on another rank's
+  std::vector<Index> probe_minus_dofs;  ///< 3 per probe: an opening probe's minus node, else -1
+
+  /// A probe's three readings of a field: the node's components, or the pair's relative motion in
+  /// its frame (plus g0 on the normal for the displacement); zeros on a rank that does not own it
+  /// (the sum over ranks is the owner's reading).
+  Vec3 probe_reading(Index p, const VectorX& field, bool is_displacement) const {
+    Vec3 value = Vec3::Zero();
+    if (probe_dofs[3 * p] < 0) return value;
+    for (int c = 0; c < 3; ++c) value[c] = field[probe_dofs[3 * p + c]];
+    const Probe& probe = problem.probes[p];
+    if (!probe.opening()) return value;
+    Vec3 minus;
+    for (int c = 0; c < 3; ++c) minus[c] = field[probe_minus_dofs[3 * p + c]];
+    Vec3 relative = probe.frame * (minus - value);
+    if (is_displacement) relative[0] += probe.initial_gap;
+    return relative;
+  }
 
   TransientSummary summary;
   ProbeHistory probe_history;
@@ -110,7 +127,7 @@ struct TransientSolver::Impl final : SecondOrderSystem {
   void choose_time_step();
   void set_initial_state();
   void probe_sample(Index i, const std::vector<double>& before, std::vector<double>& sample) const;
-  void record_probes(Index i, const std::vector<double>& sample, double time);
+  void record_probes(Index i, const std::vector<double>& sample, const std::vector<int>& states_before, double time);
   void record_terms();
   void sum_over_ranks(std::vector<double>& sample, StepSums& sums, bool with_sums);
   void progress_line(Index i, double elapsed, const std::string& note) const;
@@ -253,18 +270,32 @@ void TransientSolver::Impl::setup() {
   const mesh::Mesh& mesh = system->mesh();
   for (const Probe& probe : problem.probes) {
     if (distribution && probe.node == -1) {  // owned by another rank: this rank adds zeros
-      for (int c = 0; c < 3; ++c) probe_dofs.push_back(-1);
+      for (int c = 0; c < 3; ++c) {
+        probe_dofs.push_back(-1);
+        probe_minus_dofs.push_back(-1);
+      }
       probe_history.names.push_back(probe.name);
+      probe_history.opening.push_back(probe.opening() ? 1 : 0);
       continue;
     }
     if (probe.node < 0 || probe.node >= mesh.n_nodes()) {
       throw InputError("probe '" + probe.name + "': node " + std::to_string(probe.node) + " outside a mesh of " +
                        std::to_string(mesh.n_nodes()) + " nodes");
     }
-    for (int c = 0; c < 3; ++c) probe_dofs.push_back(system->dofs().dof(probe.node, c));
+    if (probe.opening() && (probe.minus_node >= mesh.n_nodes() || system->dofs().dof(probe.minus_node, 0) ==
+                                                                        system->dofs().dof(probe.node, 0))) {
+      throw InputError("probe '" + probe.name + "': nodes " + std::to_string(probe.minus_node) + " and " +
+                       std::to_string(probe.node) + " are not a split crack pair of this run's DOF map");
+    }
+    for (int c = 0; c < 3; ++c) {
+      probe_dofs.push_back(system->dofs().dof(probe.node, c));
+      probe_minus_dofs.push_back(probe.opening() ? system->dofs().dof(probe.minus_node, c) : -1);
+    }
     probe_history.names.push_back(probe.name);
+    probe_history.opening.push_back(probe.opening() ? 1 : 0);
   }
   probe_history.values.assign(9 * problem.probes.size(), {});
+  probe_history.states.assign(problem.probes.size(), {});
   choose_time_step();
   set_initial_state();
 
@@ -293,9 +324,10 @@ void TransientSolver::Impl::probe_sample(Index i, const std::vector<double>& bef
   const Index n_probes = static_cast<Index>(problem.probes.size());
   const double h = i == 0 ? 0.5 * dt : dt;
   for (Index p = 0; p < n_probes; ++p) {
+    const Vec3 velocity_new = probe_reading(p, velocity, false);
     for (int c = 0; c < 3; ++c) {
       const Index k = 3 * p + c;
-      const double v_old = before[3 * n_probes + k], v_new = probe_dofs[k] >= 0 ? velocity[probe_dofs[k]] : 0.0;
+      const double v_old = before[3 * n_probes + k], v_new = velocity_new[c];
       sample[9 * p + c] = before[k];
       sample[9 * p + 3 + c] = i == 0 ? v_old : 0.5 * (v_old + v_new);
       sample[9 * p + 6 + c] = (v_new - v_old) / h;
@@ -340,10 +372,20 @@ void TransientSolver::Impl::sum_over_ranks(std::vector<double>& sample, StepSums
   }
 }
 
-void TransientSolver::Impl::record_probes(Index i, const std::vector<double>& sample, double time) {
-  if (i % options.probe_interval == 0) {
-    probe_history.time.push_back(time);
-    for (std::size_t c = 0; c < sample.size(); ++c) probe_history.values[c].push_back(sample[c]);
+void TransientSolver::Impl::record_probes(Index i, const std::vector<double>& sample,
+                                          const std::vector<int>& states_before, double time) {
+  if (i % options.probe_interval != 0) return;
+  probe_history.time.push_back(time);
+  for (std::size_t c = 0; c < sample.size(); ++c) probe_history.values[c].push_back(sample[c]);
+  // The opening probes' contact states (the owner rank's: the distributed run does not record
+  // opening probes yet, its callers place probes on nodes).
+  for (std::size_t p = 0; p < problem.probes.size(); ++p) {
+    const Probe& probe = problem.probes[p];
+    if (!probe.opening()) continue;
+    const int state = !probe.state                 ? (sample[9 * p] < 0.0 ? 2 : 0)
+                      : probe.state_at_step_end ? states_before[p]
+                                                : probe.state();
+    probe_history.states[p].push_back(state);
   }
 }
 
@@ -456,6 +498,7 @@ void TransientSolver::Impl::integrate(const TransientCallbacks& callbacks) {
   CentralDifference integrator(n_dofs());
   StepSums sums;
   std::vector<double> sample(9 * n_probes), before(6 * n_probes);
+  std::vector<int> states_before(n_probes, 0);  // the opening probes' states at U(i) (implicit contact)
   const Index owned = n_owned();
   std::vector<double> kinetic_initial{
       0.5 * velocity.head(owned).cwiseProduct(moving_mass.head(owned)).dot(velocity.head(owned))};
@@ -469,16 +512,21 @@ void TransientSolver::Impl::integrate(const TransientCallbacks& callbacks) {
   for (Index i = 0; i < steps; ++i) {
     const double time = static_cast<double>(i) * dt;
     const bool sample_energy = i % o.energy_interval == 0 || i + 1 == steps;
-    for (Index k = 0; k < 3 * n_probes; ++k) {
-      before[k] = probe_dofs[k] >= 0 ? displacement[probe_dofs[k]] : 0.0;
-      before[3 * n_probes + k] = probe_dofs[k] >= 0 ? velocity[probe_dofs[k]] : 0.0;
+    for (Index p = 0; p < n_probes; ++p) {
+      const Vec3 u = probe_reading(p, displacement, true), v = probe_reading(p, velocity, false);
+      for (int c = 0; c < 3; ++c) {
+        before[3 * p + c] = u[c];
+        before[3 * (n_probes + p) + c] = v[c];
+      }
+      const Probe& probe = problem.probes[p];
+      if (probe.state && probe.state_at_step_end) states_before[p] = i == 0 ? (u[0] < 0.0 ? 2 : 0) : probe.state();
     }
     const bool with_sums = sample_energy || o.damping.alpha > 0.0;
     integrator.step(*this, time, i == 0 ? 0.0 : dt, dt, displacement, velocity, with_sums ? &sums : nullptr);
     record_terms();
     probe_sample(i, before, sample);
     if (distribution) sum_over_ranks(sample, sums, with_sums);
-    record_probes(i, sample, time);
+    record_probes(i, sample, states_before, time);
     balance.add_step_work(i, dt, sums, o.damping.alpha);
     for (const TermRecord& record : records) active_sum += record.active;
 
@@ -588,13 +636,18 @@ void write_probe_csv(const std::filesystem::path& path, const ProbeHistory& prob
   table.add("time [s]", probes.time);
   static const char* quantities[3] = {"u", "v", "a"};
   static const char* units[3] = {"m", "m/s", "m/s^2"};
+  static const char* opening_names[3] = {"gap", "slip_1", "slip_2"};
+  static const char* opening_suffixes[3] = {"", "_rate", "_acceleration"};
   for (std::size_t p = 0; p < probes.names.size(); ++p) {
+    const bool opening = p < probes.opening.size() && probes.opening[p];
     for (int q = 0; q < 3; ++q) {
       for (int c = 0; c < 3; ++c) {
-        table.add(probes.names[p] + " " + quantities[q] + "_" + axis_name(c) + " [" + units[q] + "]",
-                  probes.values[9 * p + 3 * q + c]);
+        const std::string quantity = opening ? std::string(opening_names[c]) + opening_suffixes[q]
+                                             : std::string(quantities[q]) + "_" + axis_name(c);
+        table.add(probes.names[p] + " " + quantity + " [" + units[q] + "]", probes.values[9 * p + 3 * q + c]);
       }
     }
+    if (opening) table.add(probes.names[p] + " state [0 open 1 stick 2 slip]", probes.states[p]);
   }
   io::write_csv(path, table);
 }

@@ -35,10 +35,23 @@
 
 namespace crackle::transient {
 
-/// A probe records displacement, velocity and acceleration (3 components each) of one node.
+/// A probe records displacement, velocity and acceleration (3 components each) of one node, or, as a
+/// crack-opening probe, of one crack pair's relative motion in the pair's frame: the normal gap
+/// \f$g_N = g_0 + (u^- - u^+)\cdot n^+\f$ (MODEL.md eq. 9) and the slip along two tangents (eq. 10).
 struct Probe {
   std::string name;  ///< column prefix in the CSV
-  Index node = 0;
+  Index node = 0;    ///< the node; for an opening probe the pair's plus node
+  /// Crack-opening probe: the pair's minus node (-1: a node probe), its frame (rows n+, t1, t2) and g0.
+  Index minus_node = -1;
+  Eigen::Matrix3d frame = Eigen::Matrix3d::Identity();
+  double initial_gap = 0.0;
+  /// Opening probe: the contact state of its pair as the last contact evaluation left it (0 open,
+  /// 1 stick, 2 slip); empty: the state follows from the gap (0 if g_N >= 0, else 2).
+  std::function<int()> state;
+  /// True when that evaluation is at the end of the step (implicit contact: U(i+1)), so the row of
+  /// t_i reads the state before step i; false when it is at U(i) (explicit), read after the step.
+  bool state_at_step_end = false;
+  bool opening() const { return minus_node >= 0; }
 };
 
 /// Options of a run (the scene's `transient:` section).
@@ -90,11 +103,14 @@ struct TransientProblem {
   std::shared_ptr<const Distribution> distribution;
 };
 
-/// Probe rows: times and, per probe, 9 columns u_x..u_z [m], v_x..v_z [m/s], a_x..a_z [m/s^2] at t_i.
+/// Probe rows: times and, per probe, 9 columns u_x..u_z [m], v_x..v_z [m/s], a_x..a_z [m/s^2] at t_i
+/// (an opening probe: gap, slip_1, slip_2 [m], their rates and accelerations, and its state).
 struct ProbeHistory {
   std::vector<std::string> names;
+  std::vector<char> opening;                ///< per probe: a crack-opening probe
   std::vector<double> time;
   std::vector<std::vector<double>> values;  ///< values[9 * probe + column][row]
+  std::vector<std::vector<double>> states;  ///< per probe: contact state per row (opening probes only)
 };
 
 /// Energy rows every energy_interval steps [J].
@@ -196,7 +212,9 @@ class TransientSolver {
   std::unique_ptr<Impl> impl_;
 };
 
-/// probes.csv: "time [s]", then per probe "<name> u_x [m]" ... "<name> a_z [m/s^2]".
+/// probes.csv: "time [s]", then per probe "<name> u_x [m]" ... "<name> a_z [m/s^2]"; an opening probe
+/// "<name> gap [m]", "<name> slip_1 [m]", "<name> slip_2 [m]", "<name> gap_rate [m/s]" ...,
+/// "<name> gap_acceleration [m/s^2]" ..., "<name> state [0 open 1 stick 2 slip]".
 void write_probe_csv(const std::filesystem::path& path, const ProbeHistory& probes);
 /// energy.csv: time and the EnergyHistory columns with units.
 void write_energy_csv(const std::filesystem::path& path, const EnergyHistory& energy);

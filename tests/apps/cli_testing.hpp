@@ -54,6 +54,16 @@ spectrum: {harmonics: 3, subharmonics: false, ringdown: {window_periods: 2}}
 )";
 }
 
+/// A deep steel cantilever 0.2 x 0.02 x 0.04 m (f1 about 740 Hz: 20 crack closures in 0.03 s), p = 1,
+/// [10, 1, 2] cells, clamped at x = 0, with a half-depth edge crack from the top face at x = 0.04: the
+/// start of a scene up to the crack's region (its gap and contact may follow).
+inline std::string deep_cracked_cantilever() {
+  return "mesh:\n  box: {size: [0.2, 0.02, 0.04], cells: [10, 1, 2], order: 1}\n"
+         "material: {E: 210.0e9, nu: 0.3, rho: 7850.0}\n"
+         "boundary:\n  - {face: x-, fix: [x, y, z]}\n"
+         "crack:\n  plane: {normal: x, at: 0.04}\n  region: {y: [0.0, 0.02], z: [0.02, 0.04]}\n";
+}
+
 /// A scene of the repository's data/ folder.
 inline std::string data(const std::string& name) { return std::string(CRACKLE_SOURCE_DIR) + "/data/" + name; }
 
