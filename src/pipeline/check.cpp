@@ -37,8 +37,8 @@ void run_check(const CheckOptions& options, std::ostream& out) {
         << "\n";
   }
   if (scene.gmsh_file.empty()) {
-    // The modal mesh is what check builds (the reduced model's is the same); the full explicit
-    // transient meshes without grading under mode auto.
+    // The modal mesh is what check builds; crackle run (full or reduced) and crackle sweep mesh
+    // without grading under mode auto.
     const mesh::Grading modal_grading = box_grading(scene, MeshUse::modal);
     const mesh::Grading run_grading = box_grading(scene, MeshUse::transient);
     auto grading_text = [&](mesh::Grading grading) {
@@ -50,12 +50,11 @@ void run_check(const CheckOptions& options, std::ostream& out) {
       text << grading.layers << " layers of ratio " << grading.ratio;
       return text.str();
     };
-    const char* graded_uses = " (crackle modal, check, sweep, run with the reduced model), ";
-    out << "grading      " << grading_text(modal_grading) << graded_uses << grading_text(run_grading)
-        << " (crackle run with the full model)\n";
+    out << "grading      " << grading_text(modal_grading) << " (crackle modal, check), " << grading_text(run_grading)
+        << " (crackle run, sweep)\n";
     out << "aspect ratio " << std::setprecision(4) << mesh::max_aspect_ratio(box_lines(scene, MeshUse::modal))
-        << " max" << graded_uses << mesh::max_aspect_ratio(box_lines(scene, MeshUse::transient))
-        << " max (crackle run with the full model)\n";
+        << " max (crackle modal, check), " << mesh::max_aspect_ratio(box_lines(scene, MeshUse::transient))
+        << " max (crackle run, sweep)\n";
   } else {
     out << "aspect ratio " << std::setprecision(4) << mesh::max_aspect_ratio(mesh) << " max\n";
   }

@@ -25,10 +25,6 @@ mesh::Grading box_grading(const scene::Scene& scene, MeshUse use) {
   return scene.grading.grading;
 }
 
-MeshUse run_mesh_use(const scene::Scene& scene) {
-  return scene.transient && scene.transient->model == "reduced" ? MeshUse::reduced : MeshUse::transient;
-}
-
 /// Box grid lines: the generator's, plus the ends of the material regions inside the body, so that
 /// every layer is a whole number of elements.
 std::array<std::vector<double>, 3> box_lines(const scene::Scene& scene, MeshUse use) {

@@ -46,13 +46,11 @@ struct Model {
 contact::ContactOptions scene_contact_options(const scene::Scene& scene);
 
 /// What a model is built for: `mesh.box.grading: auto` grades the box mesh towards the crack front
-/// for modal analysis and for the reduced model (the reduced transient and `crackle sweep`, whose
-/// time step is set by the retained modes, not by the smallest cell), and leaves it uniform for the
-/// full explicit transient (whose stable step the smallest graded cell would set).
-enum class MeshUse { modal, transient, reduced };
-
-/// The use of `crackle run`'s model: `reduced` with transient.model: reduced, else `transient`.
-MeshUse run_mesh_use(const scene::Scene& scene);
+/// for modal analysis and leaves it uniform for `crackle run` and `crackle sweep`: the full
+/// explicit transient's stable step would pay the smallest cell, and the reduced transient and the
+/// sweep keep the full run's mesh, so that switching transient.model changes the cost, not the
+/// answer (docs/architecture.md, "Which analysis grades").
+enum class MeshUse { modal, transient };
 
 /// The grading of the box mesh for this use (layers = 0: none).
 mesh::Grading box_grading(const scene::Scene& scene, MeshUse use);

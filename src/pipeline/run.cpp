@@ -1038,7 +1038,7 @@ namespace {
 void run_stages(const scene::Scene& scene, const RunCommandOptions& options, std::ostream& out) {
   Stopwatch total;
   const fs::path& directory = options.output_directory;
-  const Model model = build_model(scene, run_mesh_use(scene));
+  const Model model = build_model(scene, MeshUse::transient);
   std::vector<Stage> stages;
 
   Stage modal_stage{"modal", false, "", 0.0};

@@ -87,7 +87,7 @@ void run_sweep_command(const SweepCommandOptions& options, std::ostream& out, st
   }
   const fs::path& directory = options.output_directory;
   io::ensure_directory(directory);
-  const Model model = build_model(scene, MeshUse::reduced);
+  const Model model = build_model(scene, MeshUse::transient);
   Stage modal_stage{"modal", false, "", 0.0};
   const std::optional<modal::ModalResult> modes =
       run_modal_stage(scene, model, directory, options.modal_cache, modal_stage, out);

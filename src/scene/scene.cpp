@@ -70,11 +70,13 @@ Param build_parameters() {
                           "otherwise limits every order p to first-order convergence): on each side of the "
                           "front, lines at h ratio^k, k = 1..layers, h the distance to the next grid line. "
                           "Also given as a plain mode (`grading: none`).", {
-          choice("mode", "auto: graded for crackle modal, check and sweep and for crackle run with "
-                         "transient.model: reduced, uniform for the full explicit transient (it would pay the "
-                         "smallest cell in its stable step; its modal stage uses the same mesh, so the "
-                         "excitation is that mesh's own resonance); always: graded for every command; none: "
-                         "no grading.", {"auto", "always", "none"}).defaults_to("auto"),
+          choice("mode", "auto: graded for crackle modal and crackle check, uniform for crackle run and "
+                         "crackle sweep (the full explicit transient would pay the smallest cell in its stable "
+                         "step; the reduced model and the sweep keep its mesh, so that switching "
+                         "transient.model changes the cost, not the answer; the modal stage uses the same "
+                         "mesh, so the excitation is that mesh's own resonance); always: graded for every "
+                         "command (with the reduced model the way to an accurate A2/A1, docs/benchmarks.md "
+                         "section 5.1); none: no grading.", {"auto", "always", "none"}).defaults_to("auto"),
           integer("layers", "Geometric layers on each side of the front; auto: p - 1 + round(log2(D/h)) "
                               "in 1..4, h the uniform cell size across the front, D the body's thinnest side.").at_least(1)
               .at_most(8).or_word("auto").defaults_to("auto"),

@@ -19,11 +19,10 @@ using cli_testing::Result;
 }  // namespace
 
 TEST(Cli, CheckPrintsTheExpectedCountsForTheDefaultBeam) {
-  // The counts of the uniform mesh (the full explicit run's under grading: auto); the graded one below.
+  // The counts of the uniform mesh (crackle run's and sweep's under grading: auto); the graded one below.
   Result result = crackle("check " + data("beam.yaml") + " --set mesh.box.grading=none");
   ASSERT_EQ(result.exit_code, 0) << result.output;
-  EXPECT_NE(result.output.find("grading      none (crackle modal, check, sweep, run with the reduced model), none "
-                                    "(crackle run with the full model)"), std::string::npos)
+  EXPECT_NE(result.output.find("grading      none (crackle modal, check), none (crackle run, sweep)"), std::string::npos)
       << result.output;
   // 40 x 4 x 2 cells, plus a grid line at z = 0.007 for the crack edge: 40 x 4 x 3 elements of p = 2.
   EXPECT_NE(result.output.find("elements     480\n"), std::string::npos) << result.output;
@@ -34,17 +33,15 @@ TEST(Cli, CheckPrintsTheExpectedCountsForTheDefaultBeam) {
   EXPECT_NE(result.output.find("crack area   6e-05 m^2 (pairs sum to 6e-05 m^2)"), std::string::npos);
   EXPECT_NE(result.output.find("total mass   0.314 kg"), std::string::npos);  // 7850 * 0.2 * 0.02 * 0.01
 
-  // Default grading (p = 2, h = 5 mm, D = 10 mm: 1 + 1 = 2 layers of 0.2) for the modal and reduced models: x
+  // Default grading (p = 2, h = 5 mm, D = 10 mm: 1 + 1 = 2 layers of 0.2) for modal and check: x
   // gets 4 lines around 0.05, z 4 around 0.007 (0.005 and 0.01 are the neighbours): 44 x 4 x 7.
   result = crackle("check " + data("beam.yaml"));
   ASSERT_EQ(result.exit_code, 0) << result.output;
-  EXPECT_NE(result.output.find("grading      2 layers of ratio 0.2 (crackle modal, check, sweep, run with the reduced "
-                               "model), none (crackle run with the full model)"),
+  EXPECT_NE(result.output.find("grading      2 layers of ratio 0.2 (crackle modal, check), none (crackle run, sweep)"),
             std::string::npos) << result.output;
   EXPECT_NE(result.output.find("elements     1232\n"), std::string::npos) << result.output;
   // Longest x width 5 mm over the thinnest z layer 0.08 mm (0.002 * 0.2^2).
-  EXPECT_NE(result.output.find("aspect ratio 62.5 max (crackle modal, check, sweep, run with the reduced model), "
-                               "2.5 max (crackle run with the full model)"),
+  EXPECT_NE(result.output.find("aspect ratio 62.5 max (crackle modal, check), 2.5 max (crackle run, sweep)"),
             std::string::npos) << result.output;
 }
 
