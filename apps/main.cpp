@@ -332,13 +332,18 @@ int main(int argc, char** argv) {
       }
       run.progress = !quiet;
       PetscArguments petsc(arguments.own.front(), run_petsc, arguments.petsc);
-      modal::SlepcSession session(petsc.argc(), petsc.argv());
+      // PETSc starts when the modal stage first solves with SLEPc (a cached or ARPACK run never
+      // pays MPI's start-up); given PETSc options, at once, so that they are read and checked.
+      const bool options_given = !run_petsc.empty() || !arguments.petsc.empty();
+      modal::SlepcSession session(petsc.argc(), petsc.argv(),
+                                  options_given ? modal::SlepcSession::Start::now
+                                                : modal::SlepcSession::Start::on_first_use);
       pipeline::run_run_command(run, std::cout);
     }
     if (*sweep_command) {
       sweep.progress = !sweep_quiet;
       PetscArguments petsc(arguments.own.front(), {}, {});
-      modal::SlepcSession session(petsc.argc(), petsc.argv());
+      modal::SlepcSession session(petsc.argc(), petsc.argv(), modal::SlepcSession::Start::on_first_use);
       pipeline::run_sweep_command(sweep, std::cout, std::cerr);
     }
     if (*study_command) {

@@ -125,14 +125,31 @@ int mpi_size() {
   return size;
 }
 
-SlepcSession::SlepcSession(int* argc, char*** argv) {
+namespace {
+SlepcSession* deferred_session = nullptr;  ///< the session waiting for its first use, if any
+}  // namespace
+
+SlepcSession::SlepcSession(int* argc, char*** argv, Start start) : argc_(argc), argv_(argv) {
+  if (start == Start::now) {
+    initialise();
+  } else {
+    deferred_session = this;
+  }
+}
+
+void SlepcSession::initialise() {
   if (slepc_is_initialised()) return;
-  const PetscErrorCode code = SlepcInitialize(argc, argv, nullptr, nullptr);
+  const PetscErrorCode code = SlepcInitialize(argc_, argv_, nullptr, nullptr);
   if (code != 0) throw SolverError("SlepcInitialize failed with error " + std::to_string(code));
   owns_ = true;
 }
 
+void SlepcSession::start() {
+  if (deferred_session) deferred_session->initialise();
+}
+
 SlepcSession::~SlepcSession() {
+  if (deferred_session == this) deferred_session = nullptr;
   if (owns_) SlepcFinalize();
 }
 
@@ -169,6 +186,7 @@ EigenPairs solve_eigenpairs_slepc(const SparseMatrix& stiffness, const SparseMat
     m.makeCompressed();
     return solve_eigenpairs_slepc(k, m, options);
   }
+  SlepcSession::start();
   if (!slepc_is_initialised()) {
     throw SolverError(
         "SLEPc eigen-solve: SLEPc is not initialised (create a modal::SlepcSession or call "
