@@ -9,6 +9,7 @@
 #include "io/csv.hpp"
 #include "io/files.hpp"
 #include "pipeline/commands.hpp"
+#include "pipeline/limits.hpp"
 #include "pipeline/reduced_model.hpp"
 #include "pipeline/stages.hpp"
 #include "pipeline/sweep.hpp"
@@ -86,6 +87,8 @@ void run_sweep_command(const SweepCommandOptions& options, std::ostream& out, st
     throw InputError(scene.file + ": sweep: expected a sweep section for crackle sweep (frequency: {from, to}), got none");
   }
   const fs::path& directory = options.output_directory;
+  // The modal stage (mode-relative ranges) and the reduction's static solves hold K, M and copies.
+  check_memory(scene, matrices::eigen_solve);
   io::ensure_directory(directory);
   const Model model = build_model(scene, MeshUse::transient);
   Stage modal_stage{"modal", false, "", 0.0};
