@@ -73,12 +73,13 @@ CholmodFactor::CholmodFactor(const SparseMatrix& stiffness, const SparseMatrix& 
                              std::string context)
     : context_(std::move(context)), rows_(stiffness.rows()) {
   // Without a shift K itself is factorised (no copy: a static solve holds one matrix less).
+  const bool copy = shift != 0.0 || !stiffness.isCompressed();
   SparseMatrix shifted;
-  if (shift != 0.0 || !stiffness.isCompressed()) {
+  if (copy) {
     shifted = stiffness - shift * mass;
     shifted.makeCompressed();
   }
-  const SparseMatrix& matrix = shift != 0.0 || !stiffness.isCompressed() ? shifted : stiffness;
+  const SparseMatrix& matrix = copy ? shifted : stiffness;
   cholmod_start(&common_);
   common_.print = 0;
   common_.error_handler = nullptr;

@@ -72,6 +72,7 @@ struct TransientSolver::Impl final : SecondOrderSystem {
   VectorX displacement, velocity;
   std::vector<Index> probe_dofs;        ///< 3 per probe: the node's (an opening probe's plus node); -1 on another rank's
   std::vector<Index> probe_minus_dofs;  ///< 3 per probe: an opening probe's minus node, else -1
+  std::vector<double> rank_sums;        ///< sum_over_ranks' buffer, reused every step
 
   /// A probe's three readings of a field: the node's components, or the pair's relative motion in
   /// its frame (plus g0 on the normal for the displacement); zeros on a rank that does not own it
@@ -348,7 +349,8 @@ void TransientSolver::Impl::record_terms() {
 void TransientSolver::Impl::sum_over_ranks(std::vector<double>& sample, StepSums& sums, bool with_sums) {
   // One reduction per step: the probe rows (zeros from the ranks that do not own a probe), the
   // terms' dot products and energies, and the step sums when the step computed them.
-  std::vector<double> values(sample);
+  std::vector<double>& values = rank_sums;  // kept between steps: no allocation in the step loop
+  values.assign(sample.begin(), sample.end());
   for (const TermRecord& r : records) {
     values.insert(values.end(), {r.dot_displacement, r.dot_velocity, r.dot_velocity_new, r.stored, r.dissipated, r.active});
   }

@@ -5,7 +5,6 @@
 
 #include "cli_testing.hpp"
 
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -53,24 +52,13 @@ fs::path scratch() {
   return dir;
 }
 
-int run_command(const std::string& command, std::string* output) {
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  std::array<char, 4096> buffer;
-  std::string text;
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) text += buffer.data();
-  const int status = pclose(pipe);
-  if (output) *output = text;
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
 /// `crackle run` of kBody + `rest` with overrides, into scratch()/name.
 void crackle_run(const std::string& name, const std::string& rest, const std::string& overrides) {
   const fs::path scene = scratch() / (name + ".yaml");
   std::ofstream(scene) << kBody << rest;
-  std::string log;
-  const std::string command = std::string(CRACKLE_BINARY_DIR) + "/apps/crackle run " + scene.string() + " -o " +
-                              (scratch() / name).string() + " -q " + overrides;
-  ASSERT_EQ(run_command(command, &log), 0) << command << "\n" << log;
+  const std::string arguments = "run " + scene.string() + " -o " + (scratch() / name).string() + " -q " + overrides;
+  const cli_testing::Result result = cli_testing::crackle(arguments);
+  ASSERT_EQ(result.exit_code, 0) << arguments << "\n" << result.output;
 }
 
 nlohmann::json read_json(const fs::path& path) {
@@ -197,11 +185,9 @@ TEST(ReducedRun, StudyOverExcitationFrequencyComputesTheReductionOnce) {
   outputs: [spectrum]
 )";
   const fs::path output = scratch() / "study";
-  std::string log;
-  const int status = run_command(std::string(CRACKLE_BINARY_DIR) + "/apps/crackle study " + scene.string() + " -o " +
-                                     output.string() + " -j 1",
-                                 &log);
-  ASSERT_EQ(status, 0) << log;
+  const cli_testing::Result result =
+      cli_testing::crackle("study " + scene.string() + " -o " + output.string() + " -j 1");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
   int computed = 0, cached = 0;
   for (const auto& entry : fs::directory_iterator(output / "cases")) {
     const fs::path file = entry.path() / "transient.json";

@@ -7,8 +7,6 @@
 
 #include "cli_testing.hpp"
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -33,10 +31,8 @@ spectrum:
   plots: false
 )";
 
-struct Result {
-  int exit_code = -1;
-  std::string output;  ///< stdout and stderr together
-};
+using cli_testing::crackle;
+using cli_testing::Result;
 
 fs::path scratch() {
   static const fs::path dir = fs::temp_directory_path() / ("crackle-run-edges-" + std::to_string(::getpid()));
@@ -48,17 +44,6 @@ fs::path scene_file(const std::string& name = "small.yaml", const std::string& t
   const fs::path path = scratch() / name;
   std::ofstream(path) << text;
   return path;
-}
-
-Result crackle(const std::string& arguments) {
-  const std::string command = std::string(CRACKLE_BINARY_DIR) + "/apps/crackle " + arguments + " 2>&1";
-  Result result;
-  FILE* pipe = popen(command.c_str(), "r");
-  std::array<char, 4096> buffer;
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) result.output += buffer.data();
-  const int status = pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
 }
 
 Result run(const std::string& folder, const std::string& extra = "", const fs::path& scene = scene_file()) {

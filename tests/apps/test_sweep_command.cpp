@@ -6,7 +6,6 @@
 
 #include "cli_testing.hpp"
 
-#include <array>
 #include <cmath>
 #include <map>
 #include <vector>
@@ -45,15 +44,10 @@ fs::path scratch() {
 int crackle_sweep(const std::string& name, const std::string& text, const std::string& overrides, std::string* output) {
   const fs::path scene = scratch() / (name + ".yaml");
   std::ofstream(scene) << text;
-  const std::string command = std::string(CRACKLE_BINARY_DIR) + "/apps/crackle sweep " + scene.string() + " -o " +
-                              (scratch() / name).string() + " -q " + overrides + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::array<char, 4096> buffer;
-  std::string out;
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) out += buffer.data();
-  const int status = pclose(pipe);
-  if (output) *output = out;
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const cli_testing::Result result =
+      cli_testing::crackle("sweep " + scene.string() + " -o " + (scratch() / name).string() + " -q " + overrides);
+  if (output) *output = result.output;
+  return result.exit_code;
 }
 
 TEST(SweepCommand, SuperHarmonicPeakAtHalfTheBilinearFrequency) {
