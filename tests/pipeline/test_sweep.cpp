@@ -326,6 +326,12 @@ TEST(SweepStability, SteppedSineJumpsWhereTheBranchFoldsAndTheMiddleIsUnstable) 
     EXPECT_EQ(branch.points[i].stable, !middle) << "point " << i << " at " << branch.points[i].frequency_hz() << " Hz";
   }
   for (const SweepEvent& event : folds) EXPECT_EQ(event.hill_check, 1);
+  // sweep.json says so per event
+  const nlohmann::json document = sweep_json(branch, settings);
+  int agreeing = 0;
+  for (const nlohmann::json& event : document["events"])
+    if (event["kind"] == "fold") agreeing += event.value("hill_agrees", false) ? 1 : 0;
+  EXPECT_EQ(agreeing, 2);
 }
 
 TEST(SweepStability, PeriodDoublingAndTheSubharmonicBranchMatchTheSteppedSine) {
@@ -395,7 +401,8 @@ TEST(SweepFiles, TableJsonAndPlot) {
   ASSERT_EQ(table.headers.front(), "excitation frequency [Hz]");
   for (const std::string header : {"a u_x A1 [m]", "a u_x phase1 [rad]", "a u_x A6 [m]", "c u_z A0 [m]",
                                    "c u_z A2/A1 [-]", "c u_z A3/A1 [-]", "c u_z A1/2/A1 [-]",
-                                   "stable [1 yes, 0 no, -1 not computed]", "newton iterations [-]", "residual [-]"}) {
+                                   "stable [1 yes, 0 no, -1 not computed]", "newton iterations [-]", "residual [-]",
+                                   "branch period [excitation periods]"}) {
     EXPECT_NE(std::find(table.headers.begin(), table.headers.end(), header), table.headers.end()) << header;
   }
   for (const auto& column : table.columns) EXPECT_EQ(column.size(), result.points.size());
