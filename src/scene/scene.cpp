@@ -82,6 +82,13 @@ Param build_parameters() {
               .at_most(8).or_word("auto").defaults_to("auto"),
           number("ratio", "Ratio of successive layers; auto: 0.2.").above(0).below(1).or_word("auto")
               .defaults_to("auto"),
+          map_of("fronts", "Further positions to grade towards along each axis, besides the crack's own "
+                           "front (a study puts the fronts of all its cases here, so that they share one "
+                           "mesh); positions on or outside the boundary are ignored.", {
+            number("x", "Positions along x.").with_unit("m").list(1, 10000),
+            number("y", "Positions along y.").with_unit("m").list(1, 10000),
+            number("z", "Positions along z.").with_unit("m").list(1, 10000),
+          }).optional_section(),
         }).or_scalar_for("mode"),
       }),
       text("gmsh", "Gmsh MSH 4.1 file (ASCII or binary), relative to the scene file's folder: 8- or 27-node "
@@ -771,9 +778,14 @@ Scene scene_from(const Values& values) {
       if (values.has(key)) scene.box.extra_lines[axis] = values.numbers(key);
     }
     scene.grading.mode = values.word("mesh.box.grading.mode");
-    mesh::Grading grading{mesh::kAutoLayers, 0.2};
+    mesh::Grading grading;
+    grading.layers = mesh::kAutoLayers;
     if (!values.is_word("mesh.box.grading.layers")) grading.layers = values.integer("mesh.box.grading.layers");
     if (!values.is_word("mesh.box.grading.ratio")) grading.ratio = values.number("mesh.box.grading.ratio");
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::string key = "mesh.box.grading.fronts." + kAxes[axis];
+      if (values.has(key)) grading.fronts[axis] = values.numbers(key);
+    }
     scene.grading.grading = grading;
   }
 
