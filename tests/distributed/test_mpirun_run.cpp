@@ -28,11 +28,14 @@ struct Result {
 };
 
 /// Runs `crackle ARGUMENTS` on `ranks` processes (mpirun -np ranks; 0: without mpirun), within a
-/// time limit so that a hang fails the test instead of blocking it.
-Result crackle(int ranks, const std::string& arguments) {
+/// time limit so that a hang fails the test instead of blocking it. With `each_exit_code`, every
+/// rank also prints "rank exit code N" after crackle ends.
+Result crackle(int ranks, const std::string& arguments, bool each_exit_code = false) {
   std::string command = "timeout 120 ";
   if (ranks > 0) command += std::string(MPIEXEC) + " --allow-run-as-root --oversubscribe -np " + std::to_string(ranks) + " ";
-  command += std::string(CRACKLE_BINARY_DIR) + "/apps/crackle " + arguments + " 2>&1";
+  const std::string program = std::string(CRACKLE_BINARY_DIR) + "/apps/crackle " + arguments;
+  command += each_exit_code ? "sh -c '" + program + "; echo rank exit code $?'" : program;
+  command += " 2>&1";
   Result result;
   FILE* pipe = popen(("OMP_NUM_THREADS=1 " + command).c_str(), "r");
   std::array<char, 4096> buffer;
@@ -290,14 +293,22 @@ transient:
   for (const fs::path& folder : out) fs::remove_all(folder);
 }
 
+/// The number of occurrences of `text` in `output`.
+int count(const std::string& output, const std::string& text) {
+  int found = 0;
+  for (std::size_t at = output.find(text); at != std::string::npos; at = output.find(text, at + 1)) ++found;
+  return found;
+}
+
+/// One error line (from rank 0) containing `message`, and `code` as the exit code of both ranks.
+void expect_one_error(const Result& result, int code, const std::string& message) {
+  EXPECT_EQ(count(result.output, "crackle: error:"), 1) << result.output;
+  EXPECT_NE(result.output.find(message), std::string::npos) << result.output;
+  EXPECT_EQ(count(result.output, "rank exit code " + std::to_string(code)), 2) << result.output;
+}
+
 TEST(MpirunRun, BadInputGivesOneErrorLineAndTheSameExitCodeOnEveryRank) {
-  const auto errors = [](const std::string& output) {
-    int lines = 0;
-    for (std::size_t at = output.find("crackle: error:"); at != std::string::npos; at = output.find("crackle: error:", at + 1))
-      ++lines;
-    return lines;
-  };
-  // More ranks than elements.
+  // More ranks than elements (found by the partition, on every rank).
   const fs::path tiny = write_scene("tiny", R"(mesh:
   box: {size: [0.1, 0.01, 0.01], cells: [1, 1, 1], order: 1}
 material: {E: 210.0e9, nu: 0.3, rho: 7850.0}
@@ -310,25 +321,26 @@ transient:
   progress: false
 )");
   const fs::path out = temporary("bad");
-  Result result = crackle(2, "run " + tiny.string() + " -o " + out.string());
-  EXPECT_EQ(result.exit_code, 2) << result.output;  // mpirun returns the ranks' code
-  EXPECT_EQ(errors(result.output), 1) << result.output;
-  EXPECT_NE(result.output.find("more ranks than the 1 elements"), std::string::npos) << result.output;
-  // A probe outside the body.
+  expect_one_error(crackle(2, "run " + tiny.string() + " -o " + out.string(), true), 2,
+                   "mpirun -np 2: more ranks than the 1 elements of the mesh");
+  // A probe outside the body (found while placing the probes).
   const fs::path outside = write_scene("outside", chattering_cantilever("    - {name: far, point: [0.5, 0.0, 0.0]}\n"));
-  result = crackle(2, "run " + outside.string() + " -o " + out.string() + " --overwrite");
-  EXPECT_EQ(result.exit_code, 2) << result.output;
-  EXPECT_EQ(errors(result.output), 1) << result.output;
-  EXPECT_NE(result.output.find("transient.probes[3].point: expected a point in the body"), std::string::npos)
-      << result.output;
+  expect_one_error(crackle(2, "run " + outside.string() + " -o " + out.string() + " --overwrite", true), 2,
+                   "transient.probes[3].point: expected a point in the body");
   // The reduced model is a one-process run.
   std::string reduced_text = chattering_cantilever("");
   reduced_text.erase(reduced_text.find("    - {name: opening"));
   const fs::path reduced = write_scene("reduced", reduced_text);
-  result = crackle(2, "run " + reduced.string() + " -o " + out.string() + " --overwrite --set transient.model=reduced");
-  EXPECT_EQ(result.exit_code, 2) << result.output;
-  EXPECT_EQ(errors(result.output), 1) << result.output;
-  EXPECT_NE(result.output.find("transient.model: expected full under mpirun -np 2"), std::string::npos) << result.output;
+  expect_one_error(crackle(2, "run " + reduced.string() + " -o " + out.string() + " --overwrite --set transient.model=reduced", true),
+                   2, "transient.model: expected full under mpirun -np 2");
+  // A forced time step twice the stable one: the health checks stop both ranks in the time loop
+  // with one message (a solver failure, exit 3), and rank 0 still writes transient.json.
+  const Result unstable = crackle(2, "run " + reduced.string() + " -o " + out.string() +
+                                         " --overwrite --set transient.time_step=3e-6 --set transient.force_time_step=true",
+                                  true);
+  expect_one_error(unstable, 3, "transient: unstable");
+  EXPECT_EQ(read_json(out / "transient.json")["status"], "unstable");
+  EXPECT_EQ(read_json(out / "transient.json")["ranks"], 2);
   for (const fs::path& path : {tiny, outside, reduced, out}) fs::remove_all(path);
 }
 
