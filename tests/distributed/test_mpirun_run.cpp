@@ -205,6 +205,43 @@ TEST(MpirunRun, ChatteringCrackWithFrictionSameFilesAsOneProcess) {
   for (const fs::path& folder : out) fs::remove_all(folder);
 }
 
+TEST(MpirunRun, ModalStageAndSpectrumAsOneProcess) {
+  // The excitation at the bilinear frequency of mode 1 and the damping at mode 1: a modal stage.
+  std::string scene_text = chattering_cantilever("spectrum: {harmonics: 3, subharmonics: false}\n");
+  const std::string hz = "frequency: {hz: 700.0}";
+  scene_text.replace(scene_text.find(hz), hz.size(), "frequency: {mode: 1, of: bilinear}");
+  scene_text.replace(scene_text.find("  periods: 4"), 12, "  periods: 4\n  damping: {ratio: 0.01, at: {mode: 1}}");
+  const fs::path scene = write_scene("modal", scene_text);
+  const fs::path cache = temporary("modal-cache");
+  const std::array<fs::path, 3> out{temporary("modal-1"), temporary("modal-2"), temporary("modal-2-solved")};
+  // One process solves the modes into the cache; 2 ranks read them from it, then solve them (SLEPc
+  // with MUMPS over the ranks instead of CHOLMOD: the frequency differs by rounding).
+  const std::array<std::string, 3> runs{"--modal-cache " + cache.string(), "--modal-cache " + cache.string(), ""};
+  for (int k = 0; k < 3; ++k) {
+    fs::remove_all(out[k]);
+    const Result result = crackle(k == 0 ? 0 : 2, "run " + scene.string() + " -o " + out[k].string() + " -q " + runs[k]);
+    ASSERT_EQ(result.exit_code, 0) << result.output;
+    EXPECT_TRUE(fs::exists(out[k] / "modal.json"));
+  }
+  expect_same_run({out[0], out[1]});
+  const nlohmann::json one = read_json(out[0] / "spectrum.json");
+  for (int k = 1; k < 3; ++k) {
+    const nlohmann::json two = read_json(out[k] / "spectrum.json");
+    const double f1 = read_json(out[0] / "run.json")["excitation_hz"], f2 = read_json(out[k] / "run.json")["excitation_hz"];
+    EXPECT_NEAR(f2 / f1, 1.0, k == 1 ? 0.0 : 1e-10);
+    for (const std::string probe : {"tip", "root", "opening"}) {
+      const nlohmann::json& a = one["probes"][probe]["harmonics"];
+      const nlohmann::json& b = two["probes"][probe]["harmonics"];
+      ASSERT_EQ(a.size(), b.size()) << probe;
+      for (std::size_t h = 0; h < a.size(); ++h) {
+        const double reference = a[h]["amplitude"].get<double>();
+        EXPECT_NEAR(b[h]["amplitude"].get<double>(), reference, 1e-8 * std::abs(reference) + 1e-20) << probe << " " << h;
+      }
+    }
+  }
+  for (const fs::path& path : {scene, cache, out[0], out[1], out[2]}) fs::remove_all(path);
+}
+
 TEST(MpirunRun, NodeSetLoadAndInitialFieldKeepTheirTotals) {
   // A Gmsh box (4 x 2 x 2 hexahedra) whose load is a node set along its whole length (its bottom
   // face group, 15 nodes, so both ranks hold some): the force per node is the one-process one,
