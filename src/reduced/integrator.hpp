@@ -47,8 +47,12 @@ struct ReducedEnergy {
 
 /// Options of the per-step contact solve.
 struct ReducedIntegratorOptions {
-  int max_contact_iterations = 100;  ///< active-set / stick-slip iterations per step before SolverError
-  double slip_direction_tolerance = 1e-10;  ///< change of a slip direction (unit vector) that counts as converged
+  int max_contact_iterations = 100;  ///< active-set iterations (friction: Newton solves + sweeps) per step before SolverError
+  /// Friction: converged when \f$|p - P(z(p))|_\infty \le\f$ force_tolerance \f$\max(|p|_\infty, |P|_\infty)\f$.
+  double force_tolerance = 1e-9;
+  double min_line_search_step = 1.0 / 1024.0;  ///< friction Newton: smallest damping factor tried
+  int newton_iterations = 8;     ///< friction: Newton solves before (and after each) Gauss-Seidel round
+  int gauss_seidel_sweeps = 20;  ///< friction: projected Gauss-Seidel sweeps per round
 };
 
 /// Time integrator of a ReducedSystem. Borrows the system: it must outlive the integrator.
@@ -121,11 +125,28 @@ class ReducedIntegrator {
   /// Contact iterations and Cholesky/LU factorisations summed over all steps.
   long total_iterations() const { return total_iterations_; }
   long total_factorizations() const { return total_factorizations_; }
+  /// Friction: rounds of projected Gauss-Seidel sweeps the Newton solve needed, summed over all steps.
+  long total_gauss_seidel_rounds() const { return total_gauss_seidel_rounds_; }
   /// The step compliance W = B Phi S (B Phi)^T + R (c x c) [m/N].
   const MatrixX& step_compliance() const { return w_; }
 
  private:
   enum class PairState { kOpen, kStick, kSlip };
+
+  /// One pair's block of dP/dz (see friction_newton_direction): open, stick (identity), or slip along
+  /// `direction` (unit, in the tangent rows) with `radial_ratio` = mu z_N / |z_T|.
+  struct FrictionJacobian {
+    PairState state = PairState::kOpen;
+    Eigen::Vector2d direction = Eigen::Vector2d::Zero();
+    double radial_ratio = 0.0;
+  };
+
+  /// A friction iterate: forces p, their gaps, the projection P(z(p)), its Jacobian, |p - P|_inf.
+  struct FrictionIterate {
+    VectorX force, gap, projected;
+    std::vector<FrictionJacobian> jacobians;
+    double residual = 0.0;
+  };
 
   struct CachedFactor {
     std::vector<Index> rows;
@@ -137,6 +158,19 @@ class ReducedIntegrator {
   void solve_contact(const MatrixX& w, const VectorX& free_gap, bool tangential, CachedFactor* cache);
   void solve_normal(const MatrixX& w, const VectorX& free_gap, CachedFactor* cache);
   void solve_with_friction(const VectorX& free_gap);
+  /// Gaps g(p), the projection P(z(p)) of the trial forces (penalty and return mapping) and its
+  /// Jacobian blocks; returns |p - P|_inf [N].
+  double friction_map(const VectorX& p, const VectorX& free_gap, VectorX& gap, VectorX& projected,
+                      std::vector<FrictionJacobian>& jacobians) const;
+  void evaluate(const VectorX& free_gap, FrictionIterate& iterate) const;
+  bool friction_converged(const FrictionIterate& iterate) const;
+  /// At most `budget` damped Newton steps; true once converged. Counts the linear solves.
+  bool friction_newton(const VectorX& free_gap, int budget, FrictionIterate& iterate, int& solves);
+  /// `sweeps` projected Gauss-Seidel sweeps over the pairs, then re-evaluates the iterate.
+  void friction_gauss_seidel(const VectorX& free_gap, int sweeps, FrictionIterate& iterate);
+  /// The semi-smooth Newton direction for F = p - P at p (residual F).
+  VectorX friction_newton_direction(const VectorX& p, const VectorX& residual,
+                                    const std::vector<FrictionJacobian>& jacobians);
   double penalty_energy() const;
   double residual_strain(const VectorX& p, double a) const;
   void update_energy_scale();
@@ -150,6 +184,7 @@ class ReducedIntegrator {
   VectorX damping_;      ///< d_r = alpha + beta omega_r^2
   VectorX denominator_;  ///< 1 + d_r h/2 + omega_r^2 h^2/4
   VectorX normal_stiffness_, tangential_stiffness_;  ///< eps A per pair [N/m]
+  VectorX row_compliance_;  ///< friction: 1 / (eps A) per row (the Newton merit's scaling)
   MatrixX w_;
 
   double time_ = 0.0;
@@ -159,7 +194,6 @@ class ReducedIntegrator {
   VectorX p_, g_;  ///< current pair forces and gaps (also the friction history of the next step)
   VectorX p_old_, g_old_;
   std::vector<PairState> state_;
-  std::vector<Vec3> slip_direction_;  ///< (0, e1, e2) of slipping pairs
   CachedFactor step_factor_;
 
   ReducedEnergy energy_;
@@ -168,6 +202,7 @@ class ReducedIntegrator {
   int last_iterations_ = 0;
   long total_iterations_ = 0;
   long total_factorizations_ = 0;
+  long total_gauss_seidel_rounds_ = 0;
 };
 
 /// Default steps per period of the highest frequency to resolve, from the receptance test: at 40

@@ -114,17 +114,10 @@ TEST(ReductionFriction, FreeBlockKeepsItsRigidModesThePreloadAndItsVelocity) {
   EXPECT_NEAR(block.block_row.dot(integrator.modal_velocity()) / block.v0, 1.0, 1e-12);
 }
 
-// The cross-test proper: NOT PASSING YET. The stick/slip fixed point of ReducedIntegrator (states and
-// frozen slip directions iterated to a fixed point) cycles on this mesh (25 coupled pairs, 75 rows)
-// within the first microsecond of sliding, for any step tried (stop/100 .. stop/1600) and on 2 x 2
-// cells too: "stick/slip states did not settle in 100 iterations at step 4". Traced: every pair slips
-// and the frozen slip directions jump about the tangent plane from one iteration to the next (the
-// Picard iteration on the directions is unstable: the frozen-direction solve's transverse slip
-// increments, times eps_T, set the next trial direction; relaxing the update does not help). The full
-// model solves each pair in closed form and passes (tests/transient/test_friction.cpp). Enable it when
-// the reduced friction solve is made robust (a semi-smooth Newton on the condensed rows, with the
-// directions as unknowns).
-TEST(ReductionFriction, DISABLED_SlidingBlockDeceleratesAtMuNOverMAsInTheFullModel) {
+// The cross-test proper: every pair slips together through the dense flexibility (25 coupled pairs,
+// 75 rows), then the block stops and the pairs stick and slip back and forth about it (the case where
+// a stick/slip fixed point on frozen slip directions cycles).
+TEST(ReductionFriction, SlidingBlockDeceleratesAtMuNOverMAsInTheFullModel) {
   const ReducedBlock block = reduced_block();
   const double stop = block.v0 / block.deceleration;
   ReducedIntegrator integrator(block.system, stop / 400.0, [](double) { return 0.0; });
@@ -132,8 +125,10 @@ TEST(ReductionFriction, DISABLED_SlidingBlockDeceleratesAtMuNOverMAsInTheFullMod
   std::vector<double> times, speeds;
   double late_mean = 0.0;
   int late_count = 0;
+  int largest_iterations = 0;
   while (integrator.time() < 2.0 * stop) {
     integrator.step();
+    largest_iterations = std::max(largest_iterations, integrator.last_iterations());
     const double t = integrator.time(), v = block.block_row.dot(integrator.modal_velocity());
     if (t > 0.1 * stop && t < 0.7 * stop) {
       times.push_back(t);
@@ -152,8 +147,13 @@ TEST(ReductionFriction, DISABLED_SlidingBlockDeceleratesAtMuNOverMAsInTheFullMod
   double num = 0.0, den = 0.0;
   for (std::size_t k = 0; k < times.size(); ++k) num += (times[k] - mt) * (speeds[k] - mv), den += (times[k] - mt) * (times[k] - mt);
   const double measured = -num / den;
-  std::printf("reduced block: deceleration %.2f m/s^2 (mu N / m = %.2f), after the stop mean velocity %.2e m/s\n",
-              measured, block.deceleration, late_mean);
+  std::printf("reduced block: deceleration %.2f m/s^2 (mu N / m = %.2f), after the stop mean velocity %.2e m/s; "
+              "%lld steps, %.2f Newton iterations per step (largest %d), %.3f factorisations and %.3f Gauss-Seidel rounds "
+              "per step, energy error %.2e\n",
+              measured, block.deceleration, late_mean, static_cast<long long>(integrator.n_steps_taken()),
+              double(integrator.total_iterations()) / integrator.n_steps_taken(), largest_iterations,
+              double(integrator.total_factorizations()) / integrator.n_steps_taken(),
+              double(integrator.total_gauss_seidel_rounds()) / integrator.n_steps_taken(), integrator.energy_error());
   // The full test's tolerances (2 % on the deceleration, 2 % of v0 after the stop).
   EXPECT_NEAR(measured / block.deceleration, 1.0, 0.02);
   EXPECT_LT(std::abs(late_mean), 0.02 * block.v0);
