@@ -390,7 +390,8 @@ void ReducedIntegrator::solve_with_friction(const VectorX& free_gap) {
     ++rounds;
     converged = friction_newton(free_gap, options_.newton_iterations, iterate, solves);
   }
-  // The solution: p = P(z(p)) to the tolerance, the gaps those of p.
+  // The solution p = P(z(p)) to the tolerance, and its gaps. (Storing P instead, and recomputing the
+  // gaps, would amplify the residual by eps_N A W.)
   p_ = iterate.force;
   g_ = iterate.gap;
   for (Index i = 0; i < system_.n_pairs(); ++i) state_[i] = iterate.jacobians[i].state;

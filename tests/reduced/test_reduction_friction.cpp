@@ -9,6 +9,7 @@
 #include <cstdio>
 
 #include "contact/contact.hpp"
+#include "contact/penalty.hpp"
 #include "fem/material.hpp"
 #include "fem/system.hpp"
 #include "mesh/box.hpp"
@@ -157,6 +158,98 @@ TEST(ReductionFriction, SlidingBlockDeceleratesAtMuNOverMAsInTheFullModel) {
   // The full test's tolerances (2 % on the deceleration, 2 % of v0 after the stop).
   EXPECT_NEAR(measured / block.deceleration, 1.0, 0.02);
   EXPECT_LT(std::abs(late_mean), 0.02 * block.v0);
+}
+
+// Many coupled pairs, slipping and sticking in turn: a steel plate clamped on x- with a mid-plane
+// delamination over its free half (bench_reduced's body, 8 x 8 x 2 cells: 36 pairs, 108 rows) under a
+// harmonic z force on the free end's top edge. Bending slides the two sublaminates over each other
+// (the closed half-period) and opens them (the other). At every step every pair must satisfy the
+// contact law to the solver's tolerance: the penalty p_N = eps_N A max(0, -g_N) and Coulomb's return
+// mapping (eq. 15) of the step's tangential increment, recomputed here by contact::coulomb_return_mapping
+// (relative to the largest pair force; the solver stops at 1e-9).
+TEST(ReductionFriction, ManyCoupledPairsSatisfyThePenaltyAndCoulombAtEveryPairAndStep) {
+  mesh::BoxSpec box;
+  box.size = Vec3(0.2, 0.2, 0.01);
+  box.cells = {8, 8, 2};
+  mesh::CrackSpec crack;
+  crack.normal = kZ;
+  crack.at = 0.005;
+  crack.region = {{{0.1, 0.2}, {0.0, 0.2}, {0.0, 0.0}}};
+  const mesh::Mesh mesh = mesh::build_box_mesh(box, crack);
+  const fem::Materials materials = {fem::isotropic(210e9, 0.3, 7850.0)};
+  const std::vector<fem::DirichletCondition> clamp = {{mesh.node_sets.at("x-"), {0, 1, 2}, {0.0, 0.0, 0.0}, "x-"}};
+  const fem::System system(mesh, materials, clamp, mesh::Variant::open);
+  std::vector<Index> tip_top;
+  for (Index node = 0; node < mesh.n_nodes(); ++node)
+    if (mesh.nodes[node].x() > 0.2 - 1e-9 && mesh.nodes[node].z() > 0.01 - 1e-9) tip_top.push_back(node);
+  const fem::LoadShape load = system.load_shape({"push", tip_top, {}, Vec3(0.0, 0.0, 1.0)});
+  ReductionOptions options;
+  options.modes = 20;
+  options.friction = true;
+  const Reduction reduction = compute_reduction(system, options, {}, load);
+  contact::ContactOptions contact;
+  contact.friction_coefficient = kFriction;
+  const contact::PenaltyChoice penalty = contact::choose_penalty(mesh, materials, contact);
+  ReducedSystem reduced = reduced_system(reduction, 20, 1e3);
+  reduced.normal_penalty = penalty.normal_penalty;
+  reduced.tangential_penalty = penalty.tangential_penalty;
+  reduced.friction_coefficient = kFriction;
+  const Index n = reduced.n_pairs();
+  ASSERT_EQ(n, 36);
+
+  const int steps_per_period = 200;
+  const double h = reduced_time_step(reduced, 0.0), frequency = 1.0 / (steps_per_period * h);
+  const auto force = [frequency](double t) { return std::sin(2.0 * 3.14159265358979 * frequency * t); };
+  // The same run frictionless: its energy error is the impacts' (the massless boundary closing within a
+  // step, O(h^2)); friction must add none (its dissipation is exact per step).
+  ReducedSystem frictionless = reduced;
+  frictionless.friction_coefficient = 0.0;
+  ReducedIntegrator reference(frictionless, h, force);
+  reference.advance(2 * steps_per_period);
+  ReducedIntegrator integrator(reduced, h, force);
+  VectorX p_old = integrator.pair_forces(), g_old = integrator.gaps();
+  double worst_normal = 0.0, worst_tangential = 0.0, worst_cone = 0.0;
+  long slip_steps = 0, stick_steps = 0, iterations = 0;
+  int largest = 0;
+  for (int k = 0; k < 2 * steps_per_period; ++k) {
+    integrator.step();
+    const VectorX& p = integrator.pair_forces();
+    const VectorX& g = integrator.gaps();
+    const double scale = std::max(p.lpNorm<Eigen::Infinity>(), 1e-300);
+    for (Index i = 0; i < n; ++i) {
+      const Index r = 3 * i;
+      const double area = reduced.pair_area[i];
+      const double normal = reduced.normal_penalty * area * std::max(0.0, -g[r]);
+      worst_normal = std::max(worst_normal, std::abs(p[r] - normal) / scale);
+      const contact::CoulombUpdate update = contact::coulomb_return_mapping(
+          Vec3(0.0, p_old[r + 1], p_old[r + 2]) / area, Vec3(0.0, g[r + 1] - g_old[r + 1], g[r + 2] - g_old[r + 2]),
+          Vec3::UnitX(), reduced.tangential_penalty, kFriction, normal / area);
+      worst_tangential = std::max(
+          worst_tangential, (Vec3(0.0, p[r + 1], p[r + 2]) - area * update.traction).norm() / scale);
+      worst_cone = std::max(worst_cone, (std::hypot(p[r + 1], p[r + 2]) - kFriction * p[r]) / scale);
+    }
+    if (integrator.n_slipping() > 0) ++slip_steps;
+    if (integrator.n_closed() > integrator.n_slipping()) ++stick_steps;
+    iterations += integrator.last_iterations();
+    largest = std::max(largest, integrator.last_iterations());
+    p_old = p;
+    g_old = g;
+  }
+  std::printf("plate: %lld pairs, %lld steps with slip, %lld with stick, %.2f iterations per step (largest %d), "
+              "%ld Gauss-Seidel rounds, %.2f factorisations per step; worst relative |p_N - eps A max(0,-g)| %.1e, "
+              "|p_T - return mapping| %.1e, |p_T| - mu p_N %.1e; energy error %.2e (frictionless %.2e), friction dissipation "
+              "%.2e J\n",
+              static_cast<long long>(n), slip_steps, stick_steps, double(iterations) / (2 * steps_per_period), largest,
+              integrator.total_gauss_seidel_rounds(), double(integrator.total_factorizations()) / (2 * steps_per_period),
+              worst_normal, worst_tangential, worst_cone, integrator.energy_error(), reference.energy_error(),
+              integrator.energy().friction_dissipation);
+  EXPECT_GT(slip_steps, 20);
+  EXPECT_GT(stick_steps, 20);
+  EXPECT_LT(worst_normal, 1e-8);
+  EXPECT_LT(worst_tangential, 1e-8);
+  EXPECT_LT(worst_cone, 1e-9);  // the solver's force tolerance
+  EXPECT_GT(integrator.energy().friction_dissipation, 0.0);
+  EXPECT_LT(integrator.energy_error(), reference.energy_error() + 1e-3);
 }
 
 }  // namespace
