@@ -52,8 +52,8 @@ int main(int argc, char** argv) {
   int highest_modes = 0;
   for (double m : mode_counts) highest_modes = std::max(highest_modes, static_cast<int>(m));
   std::printf("| pairs | free DOFs | modes | modes s | static images s | W MiB | us/step | iterations/step | "
-              "factorisations/step | closed fraction | slipping fraction | peak RSS MiB |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+              "factorisations/step | rows/factorisation (largest) | closed fraction | slipping fraction | peak RSS MiB |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (double target : pair_targets) {
     // (n/2) (n + 1) pairs ~ target.
     int n = 4;
@@ -95,6 +95,7 @@ int main(int argc, char** argv) {
                                             [frequency](double t) { return std::sin(2.0 * kPi * frequency * t); });
       integrator.advance(steps_per_period);
       const long iterations = integrator.total_iterations(), factorizations = integrator.total_factorizations();
+      const long factorized_rows = integrator.total_factorized_rows();
       double closed = 0.0, slipping = 0.0;
       Stopwatch clock;
       for (int k = 0; k < steps_per_period; ++k) {
@@ -104,12 +105,15 @@ int main(int argc, char** argv) {
       }
       const double seconds = clock.seconds();
       const double c = static_cast<double>(reduced_system.n_rows());
-      std::printf("| %lld | %lld | %lld | %.2f | %.2f | %.1f | %.1f | %.2f | %.3f | %.2f | %.2f | %.0f |\n",
+      std::printf("| %lld | %lld | %lld | %.2f | %.2f | %.1f | %.1f | %.2f | %.3f | %.0f (%ld) | %.2f | %.2f | %.0f |\n",
                   static_cast<long long>(reduced_system.n_pairs()), static_cast<long long>(reduction.shapes.rows()),
                   static_cast<long long>(modes), reduction.modes_s, reduction.flexibility_s,
                   c * c * 8.0 / (1024.0 * 1024.0), 1e6 * seconds / steps_per_period,
                   double(integrator.total_iterations() - iterations) / steps_per_period,
                   double(integrator.total_factorizations() - factorizations) / steps_per_period,
+                  double(integrator.total_factorized_rows() - factorized_rows) /
+                      std::max(1L, integrator.total_factorizations() - factorizations),
+                  integrator.largest_factorized_rows(),
                   closed / steps_per_period, slipping / steps_per_period, peak_rss_bytes() / (1024.0 * 1024.0));
       std::fflush(stdout);
     }

@@ -129,6 +129,8 @@ void ReducedIntegrator::set_initial_state(const VectorX& modal_displacement, con
   total_iterations_ = 0;
   total_factorizations_ = 0;
   total_gauss_seidel_rounds_ = 0;
+  total_factorized_rows_ = 0;
+  largest_factorized_rows_ = 0;
 }
 
 void ReducedIntegrator::solve_normal(const MatrixX& w, const VectorX& free_gap, CachedFactor* cache) {
@@ -154,6 +156,8 @@ void ReducedIntegrator::solve_normal(const MatrixX& w, const VectorX& free_gap, 
         factor.rows = rows;
         factor.valid = true;
         ++total_factorizations_;
+        total_factorized_rows_ += static_cast<long>(rows.size());
+        largest_factorized_rows_ = std::max(largest_factorized_rows_, static_cast<long>(rows.size()));
       }
       const VectorX x = factor.factor.solve(-free_gap(rows));
       p_(rows) = x;
@@ -256,6 +260,8 @@ VectorX ReducedIntegrator::friction_newton_direction(const VectorX& p, const Vec
       step_factor_.rows = rows;
       step_factor_.valid = true;
       ++total_factorizations_;
+      total_factorized_rows_ += size;
+      largest_factorized_rows_ = std::max(largest_factorized_rows_, static_cast<long>(size));
     }
     const VectorX solution = step_factor_.factor.solve(rhs);
     delta(rows) = solution;
@@ -283,6 +289,8 @@ VectorX ReducedIntegrator::friction_newton_direction(const VectorX& p, const Vec
   const VectorX solution = matrix.partialPivLu().solve(rhs);
   delta(rows) = solution;
   ++total_factorizations_;
+  total_factorized_rows_ += size;
+  largest_factorized_rows_ = std::max(largest_factorized_rows_, static_cast<long>(size));
   return delta;
 }
 
@@ -379,16 +387,25 @@ void ReducedIntegrator::solve_with_friction(const VectorX& free_gap) {
   FrictionIterate iterate;
   iterate.force = p_;
   evaluate(free_gap, iterate);
+  const FrictionIterate start = iterate;
   int solves = 0, rounds = 0;
   bool converged = friction_newton(free_gap, options_.newton_iterations, iterate, solves);
+  if (!converged) iterate = start;  // Newton may have wandered off: the sweeps restart from the warm start
   while (!converged) {
-    if (solves + rounds * options_.gauss_seidel_sweeps >= options_.max_contact_iterations)
-      fail(("friction solve did not converge in " + std::to_string(options_.max_contact_iterations) +
-            " iterations (residual " + format_number(iterate.residual) + " N)")
+    if (rounds == options_.max_gauss_seidel_rounds)
+      fail(("friction solve did not converge in " + std::to_string(solves) + " Newton solves and " +
+            std::to_string(rounds * options_.gauss_seidel_sweeps) + " Gauss-Seidel sweeps (residual " +
+            format_number(iterate.residual) + " N)")
                .c_str());
     friction_gauss_seidel(free_gap, options_.gauss_seidel_sweeps, iterate);
     ++rounds;
-    converged = friction_newton(free_gap, options_.newton_iterations, iterate, solves);
+    converged = friction_converged(iterate);
+    if (converged) break;
+    FrictionIterate polished = iterate;  // a Newton finish from the sweeps' iterate, kept only if it converges
+    if (friction_newton(free_gap, options_.newton_iterations, polished, solves)) {
+      iterate = std::move(polished);
+      converged = true;
+    }
   }
   // The solution p = P(z(p)) to the tolerance, and its gaps. (Storing P instead, and recomputing the
   // gaps, would amplify the residual by eps_N A W.)

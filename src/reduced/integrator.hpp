@@ -47,12 +47,13 @@ struct ReducedEnergy {
 
 /// Options of the per-step contact solve.
 struct ReducedIntegratorOptions {
-  int max_contact_iterations = 100;  ///< active-set iterations (friction: Newton solves + sweeps) per step before SolverError
+  int max_contact_iterations = 100;  ///< active-set iterations (friction: Newton solves) per step before SolverError
   /// Friction: converged when \f$|p - P(z(p))|_\infty \le\f$ force_tolerance \f$\max(|p|_\infty, |P|_\infty)\f$.
   double force_tolerance = 1e-9;
   double min_line_search_step = 1.0 / 1024.0;  ///< friction Newton: smallest damping factor tried
   int newton_iterations = 8;     ///< friction: Newton solves before (and after each) Gauss-Seidel round
   int gauss_seidel_sweeps = 20;  ///< friction: projected Gauss-Seidel sweeps per round
+  int max_gauss_seidel_rounds = 100;  ///< friction: rounds before SolverError
 };
 
 /// Time integrator of a ReducedSystem. Borrows the system: it must outlive the integrator.
@@ -127,6 +128,11 @@ class ReducedIntegrator {
   long total_factorizations() const { return total_factorizations_; }
   /// Friction: rounds of projected Gauss-Seidel sweeps the Newton solve needed, summed over all steps.
   long total_gauss_seidel_rounds() const { return total_gauss_seidel_rounds_; }
+  /// Rows of the factorised blocks summed over all factorisations (their mean size: divide by
+  /// total_factorizations()).
+  long total_factorized_rows() const { return total_factorized_rows_; }
+  /// Rows of the largest factorised block so far.
+  long largest_factorized_rows() const { return largest_factorized_rows_; }
   /// The step compliance W = B Phi S (B Phi)^T + R (c x c) [m/N].
   const MatrixX& step_compliance() const { return w_; }
 
@@ -203,6 +209,8 @@ class ReducedIntegrator {
   long total_iterations_ = 0;
   long total_factorizations_ = 0;
   long total_gauss_seidel_rounds_ = 0;
+  long total_factorized_rows_ = 0;
+  long largest_factorized_rows_ = 0;
 };
 
 /// Default steps per period of the highest frequency to resolve, from the receptance test: at 40
