@@ -62,19 +62,19 @@ struct ReducedIntegratorOptions {
 /// primal-dual active set on the normal rows, warm-started from the previous step; each iteration
 /// solves \f$(K_A^{-1} + W_{AA})\,p_A = -\tilde g_A\f$ (K_A = eps_N A) by a Cholesky factor cached for
 /// the active set (kept while the set does not change), then re-activates rows with g < 0 and
-/// releases rows with p <= 0. With friction: the same for the normal rows, plus per closed pair the
-/// stick rows \f$p_T/k_T + g_T = p_T^{old}/k_T + g_T^{old}\f$ (k_T = eps_T A, symmetric, so Cholesky
-/// again) or the slip rows \f$p_T = \mu p_N e\f$ with the slip direction e frozen (LU), iterated with
-/// the return mapping until the stick/slip states and directions are unchanged (a fixed point;
-/// exact in one pass for straight slip).
+/// releases rows with p <= 0. With friction: the condensed pair equations \f$F(p) = p - P(z(p)) = 0\f$,
+/// z the trial forces (normal \f$-\varepsilon_N A g_N\f$, tangential the elastic predictor of the step's
+/// tangential increment) and P the penalty (eq. 25d) with Coulomb's return mapping (eq. 15,
+/// contact::coulomb_return_mapping). A semi-smooth Newton with its generalized Jacobian (Cholesky on
+/// the stick-only block, cached; LU while a pair slips) and an Armijo line search, warm-started from
+/// the previous step; where it stalls at the kinks of P (states changing on many coupled pairs) it
+/// restarts as rounds of projected Gauss-Seidel sweeps over the pairs on \f$K^{-1} + W\f$ (robust,
+/// linear), each round followed by a Newton finish kept only if it converges.
 ///
 /// **Cost.** Setup: W in O(c^2 m). Per step: O(c m) for the free gaps, O(c |A|) for the gaps of the
 /// solution, O(|A|^2) per Cholesky solve, plus O(|A|^3/3) whenever the active set differs from the
-/// cached one (frictionless), or an O(|A|^3) LU per iteration while any pair slips (friction).
-/// Measured (m = 40, one core, breathing half the crack): c = 100 rows 44 us/step (1.14 iterations,
-/// 0.14 factorisations per step); c = 1000 rows 11.9 ms/step, dominated by 0.75 refactorisations per
-/// step of the ~530-row active block (a low-rank update of the cached factor is the next step);
-/// friction c = 99 rows 166 us/step, c = 300 rows 6.3 ms/step (3.2-3.6 iterations, all LU).
+/// cached one (frictionless), or an O((3|A|)^3) LU per Newton solve while any pair slips, and O(c^2)
+/// per Gauss-Seidel sweep (friction). Measured: docs/benchmarks.md section 8.
 class ReducedIntegrator {
  public:
   using LoadFunction = std::function<double(double)>;
