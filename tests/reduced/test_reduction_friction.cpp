@@ -7,9 +7,11 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "contact/contact.hpp"
 #include "contact/penalty.hpp"
+#include "core/errors.hpp"
 #include "fem/material.hpp"
 #include "fem/system.hpp"
 #include "mesh/box.hpp"
@@ -250,6 +252,34 @@ TEST(ReductionFriction, ManyCoupledPairsSatisfyThePenaltyAndCoulombAtEveryPairAn
   EXPECT_LT(worst_cone, 1e-9);  // the solver's force tolerance
   EXPECT_GT(integrator.energy().friction_dissipation, 0.0);
   EXPECT_LT(integrator.energy_error(), reference.energy_error() + 1e-3);
+}
+
+// A friction solve cut short (one Newton solve, no Gauss-Seidel round) fails with a SolverError that
+// names the step, the Newton solves and the residual; with the default budget the same step converges.
+TEST(ReductionFriction, AnUnconvergedFrictionSolveNamesTheStep) {
+  const ReducedBlock block = reduced_block();
+  const double h = block.v0 / block.deceleration / 400.0;
+  ReducedIntegratorOptions options;
+  options.newton_iterations = 1;
+  options.max_gauss_seidel_rounds = 0;
+  ReducedIntegrator cut(block.system, h, nullptr, options);
+  cut.set_initial_state(block.q0, block.v0_modal);
+  ReducedIntegrator full(block.system, h, nullptr);
+  full.set_initial_state(block.q0, block.v0_modal);
+  bool thrown = false;
+  for (int k = 0; k < 20 && !thrown; ++k) {
+    full.step();
+    try {
+      cut.step();
+    } catch (const SolverError& error) {
+      thrown = true;
+      const std::string message = error.what();
+      EXPECT_NE(message.find("friction solve did not converge in 1 Newton solves"), std::string::npos) << message;
+      EXPECT_NE(message.find("at step " + std::to_string(k + 1)), std::string::npos) << message;
+    }
+  }
+  EXPECT_TRUE(thrown);
+  EXPECT_GT(full.n_closed(), 0);
 }
 
 }  // namespace
