@@ -76,7 +76,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "reduction: %d x %d x 2 cells, %lld pairs...\n", n, n,
                  static_cast<long long>(reduced::split_pairs(mesh).size()));
     const double penalty = contact::choose_penalty(mesh, materials, contact::ContactOptions{}).normal_penalty;
-    const reduced::Reduction reduction = reduced::compute_reduction(system, options, {tip_top.front()}, load);
+    const reduced::Reduction reduction = reduced::compute_reduction(system, options, {reduced::OutputPoint{tip_top.front()}}, load);
     for (double modes_value : mode_counts) {
       const Index modes = static_cast<Index>(modes_value);
       reduced::ReducedSystem reduced_system = reduced::reduced_system(reduction, modes, 1.0);
