@@ -285,7 +285,9 @@ Param build_parameters() {
         number("y", "Range along y.").with_unit("m").list(2),
         number("z", "Range along z.").with_unit("m").list(2),
       }).defaults_to("[]"),
-      map_of("snapshots", "Displacement fields written as VTU files.", {
+      map_of("snapshots", "Displacement fields written as VTU files. With transient.model: reduced the field is "
+                          "u = Phi q + the static correction G_res (B^T p + f a) (HYBRID.md sec. 2), recovered only "
+                          "at the snapshots (one factor of K, made at the first).", {
         integer("count", "Number of snapshots spread evenly over the run (0: none), at most one per step; "
                          "snapshots.pvd lists them with their times (a time series in ParaView).")
             .at_least(0).defaults_to("0"),
