@@ -27,24 +27,12 @@ namespace {
 /// A 10 x 2 x 1 cantilever of p = 1 with a half-depth edge crack from the top face at x = 0.04.
 const std::string kBody = cli_testing::cantilever("[10, 2, 1]");
 
-/// Harmonic tip load at 150 Hz (f1 about 200 Hz), large enough to open and close the crack every
-/// period; 5 % damping, 40 periods, spectrum over the last 10. Probes at the crack mouth: the opening
-/// of the pair there, and the two copies of its node.
-const char* kBreathing = R"(transient:
-  excitation: {point: [0.2, 0.01, 0.01], direction: z, amplitude: 20.0, frequency: 150}
-  damping: {ratio: 0.05, at: 150}
-  periods: 40
-  progress: false
-  probes:
-    - {name: mouth, crack_opening: [0.04, 0.01, 0.01]}
+/// The forced tip load of cli_testing (150 Hz, the crack breathing every period). Probes at the crack
+/// mouth: the opening of the pair there, and the two copies of its node.
+const std::string kBreathing = cli_testing::forced_tip(R"(    - {name: mouth, crack_opening: [0.04, 0.01, 0.01]}
     - {name: lower, point: [0.04, 0.01, 0.01], side: lower, component: x}
     - {name: upper, point: [0.04, 0.01, 0.01], side: upper, component: x}
-spectrum:
-  harmonics: 3
-  subharmonics: false
-  steady_state: {tolerance: 0, window_periods: 10}
-  plots: false
-)";
+)");
 
 /// A slow tip load (20 Hz, a tenth of f1) for one period from t = 0, snapshots at each quarter: the
 /// first (load up: the top crack pressed shut) and the third (load down: open) are at the load's peaks.
