@@ -110,7 +110,7 @@ std::vector<reduced::OutputPoint> output_points(const scene::Scene& scene, const
 }
 
 /// Per probe, the index of an opening probe's pair among the reduced model's pairs (-1 otherwise).
-void probe_pairs(const mesh::Mesh& mesh, bool with_pairs, const std::vector<transient::Probe>* probes,
+void find_probe_pairs(const mesh::Mesh& mesh, bool with_pairs, const std::vector<transient::Probe>* probes,
                  ReducedModel& result) {
   const std::vector<mesh::CrackPair> pairs = with_pairs ? reduced::split_pairs(mesh) : std::vector<mesh::CrackPair>{};
   const std::size_t n_probes = result.output_names.size() / 3;
@@ -167,7 +167,7 @@ ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, 
   }
   const bool with_pairs = with_crack && scene.contact.model != "none";
   if (!with_pairs) drop_pairs(result.system);
-  probe_pairs(model.mesh, with_pairs, probes, result);
+  find_probe_pairs(model.mesh, with_pairs, probes, result);
   if (section.snapshots > 0) {
     result.fields = std::make_unique<reduced::FieldRecovery>(system, *reduction, modes, load, amplitude, with_pairs,
                                                              section.reduced.residual_flexibility);

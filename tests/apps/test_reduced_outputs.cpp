@@ -281,6 +281,7 @@ TEST(ReducedOutputs, CacheKeepsReductionsOfDifferentOutputRowsApart) {
   const std::vector<double> fresh = vtu_displacement(scratch() / "cache-node" / "snapshot_0002.vtu");
   const std::vector<double> from_cache = vtu_displacement(scratch() / "cache-node-again" / "snapshot_0002.vtu");
   EXPECT_LT(relative_difference(from_cache, fresh), 1e-12);
+  EXPECT_TRUE(read_json(scratch() / "cache-node-again" / "transient.json")["snapshots"]["static_factor"].get<bool>());
   auto columns = read_probes("cache-opening", 0.0);
   EXPECT_FALSE(columns["tip gap [m]"].empty());
   EXPECT_FALSE(columns["tip slip_1 [m]"].empty());
