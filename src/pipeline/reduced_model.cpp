@@ -111,7 +111,7 @@ std::vector<reduced::OutputPoint> output_points(const scene::Scene& scene, const
 
 /// Per probe, the index of an opening probe's pair among the reduced model's pairs (-1 otherwise).
 void find_probe_pairs(const mesh::Mesh& mesh, bool with_pairs, const std::vector<transient::Probe>* probes,
-                 ReducedModel& result) {
+                      ReducedModel& result) {
   const std::vector<mesh::CrackPair> pairs = with_pairs ? reduced::split_pairs(mesh) : std::vector<mesh::CrackPair>{};
   const std::size_t n_probes = result.output_names.size() / 3;
   result.probe_pairs.assign(n_probes, -1);
@@ -172,7 +172,7 @@ ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, 
     result.fields = std::make_unique<reduced::FieldRecovery>(system, *reduction, modes, load, amplitude, with_pairs,
                                                              section.reduced.residual_flexibility);
   }
-  if (with_crack && scene.contact.model != "none") {
+  if (with_pairs) {
     const contact::PenaltyChoice penalty = contact::choose_penalty(model.mesh, model.materials, contact_options);
     result.system.normal_penalty = penalty.normal_penalty;
     result.system.tangential_penalty = penalty.tangential_penalty;
