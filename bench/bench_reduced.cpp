@@ -82,7 +82,8 @@ int main(int argc, char** argv) {
     contact::ContactOptions contact_options;
     contact_options.friction_coefficient = friction;
     const contact::PenaltyChoice penalty = contact::choose_penalty(mesh, materials, contact_options);
-    const reduced::Reduction reduction = reduced::compute_reduction(system, options, {tip_top.front()}, load);
+    const reduced::Reduction reduction =
+        reduced::compute_reduction(system, options, {reduced::OutputPoint{tip_top.front()}}, load);
     for (double modes_value : mode_counts) {
       const Index modes = static_cast<Index>(modes_value);
       reduced::ReducedSystem reduced_system = reduced::reduced_system(reduction, modes, 1.0);

@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Runs the benchmarks and prints Markdown tables for docs/benchmarks.md.
-# Usage: scripts/bench.sh [assembly|modal|modal-scale|transient|spectrum|study|reduced|reduced-scale|reduced-composite|sweep|all]   (default all)
+# Usage: scripts/bench.sh [assembly|modal|modal-scale|transient|spectrum|study|reduced|reduced-scale|reduced-composite|reduced-snapshots|sweep|all]   (default all)
 # (sweep: data/beam.yaml by harmonic balance (cold cache), without stability and by stepped sine; cost and peaks vs H)
 # (reduced: data/beam.yaml full vs transient.model=reduced; FULL_DIR=dir reuses a full run's outputs)
 # (reduced-scale: bench_reduced, cost per step vs crack pairs (REDUCED_PAIRS, default 100..5000) and modes)
 # (reduced-composite: data/composite-plate.yaml full vs reduced, both cut to COMPOSITE_PERIODS periods (default 12))
+# (reduced-snapshots: data/beam.yaml reduced, cached reduction, with 0, 10 and 60 snapshots: the field recovery's cost)
 # (modal = work-precision + scale; modal-scale = the scale part alone)
 #
 # Environment:
@@ -21,8 +22,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 what="${1:-all}"
-case "$what" in assembly|modal|modal-scale|transient|spectrum|study|reduced|reduced-scale|reduced-composite|sweep|all) ;; *)
-  echo "usage: scripts/bench.sh [assembly|modal|modal-scale|transient|spectrum|study|reduced|reduced-scale|reduced-composite|sweep|all]" >&2; exit 2 ;;
+case "$what" in assembly|modal|modal-scale|transient|spectrum|study|reduced|reduced-scale|reduced-composite|reduced-snapshots|sweep|all) ;; *)
+  echo "usage: scripts/bench.sh [assembly|modal|modal-scale|transient|spectrum|study|reduced|reduced-scale|reduced-composite|reduced-snapshots|sweep|all]" >&2; exit 2 ;;
 esac
 if [[ -n "${BUILD:-}" ]]; then
   [[ "${BENCH_NO_BUILD:-0}" == 1 ]] || cmake --build "$BUILD" -j"$(nproc)" >/dev/null
@@ -190,6 +191,42 @@ if want reduced-scale; then
     --pairs "${REDUCED_PAIRS:-100,300,1000,3000,5000}" --modes 10,40
   echo
   echo "peak RSS of the whole sweep over sizes: $(awk '/Maximum resident/{print int($6/1024)}' "$out/reduced-scale-time.txt") MiB"
+fi
+
+if want reduced-snapshots; then
+  echo
+  echo "### Reduced transient: the cost of snapshots (data/beam.yaml, all 60 periods, cached reduction, 3 alternated runs each)"
+  load
+  cache="$out/snapshots-cache"
+  rm -rf "$cache"
+  "$crackle" run data/beam.yaml -o "$out/snapshots-warm" -q --set transient.model=reduced --modal-cache "$cache" >/dev/null
+  dirs=()
+  for k in 1 2 3; do
+    for n in 0 10 60; do
+      "$crackle" run data/beam.yaml -o "$out/snapshots-$n-$k" -q --set transient.model=reduced --modal-cache "$cache" \
+        --set spectrum.plots=false --set spectrum.steady_state.tolerance=0 --set transient.snapshots.count=$n >/dev/null
+      dirs+=("$out/snapshots-$n-$k")
+    done
+  done
+  python3 - "${dirs[@]}" <<'PY'
+import json, os, statistics, sys
+rows = {}
+for d in sys.argv[1:]:
+    n = int(d.split("-")[-2])
+    r = json.load(open(d + "/run.json")); st = {x["name"]: x["seconds"] for x in r["stages"]}
+    size = sum(os.path.getsize(os.path.join(d, f)) for f in os.listdir(d) if f.startswith("snapshot_"))
+    rows.setdefault(n, []).append((st["transient"], r["wall_s"], size))
+base = statistics.median(t for t, _, _ in rows[0])
+print("| snapshots | transient stage s (median of 3) | run.json wall s (median) | transient s over 0 snapshots | snapshot MiB |")
+print("|---|---|---|---|---|")
+median = {n: statistics.median(x[0] for x in rows[n]) for n in rows}
+for n in sorted(rows):
+    w = statistics.median(x[1] for x in rows[n])
+    print(f"| {n} | {median[n]:.3f} | {w:.3f} | {median[n] - base:.3f} | {rows[n][0][2] / 2**20:.1f} |")
+each = (median[60] - median[10]) / 50
+print(f"\neach further snapshot (10 -> 60): {each:.4f} s; the first (the factor of K, then one solve): "
+      f"{median[10] - base - 9 * each:.3f} s")
+PY
 fi
 
 if want reduced-composite; then

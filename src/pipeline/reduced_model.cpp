@@ -81,11 +81,53 @@ VectorX project(const reduced::Reduction& reduction, Index modes, const fem::Sys
   return q;
 }
 
+/// The output points of the probes (3 rows each) and their names and offsets: the placed probes'
+/// nodes, copies and opening pairs (frame n+, t1, t2), or each probe's nearest node.
+std::vector<reduced::OutputPoint> output_points(const scene::Scene& scene, const Model& model,
+                                                const std::vector<transient::Probe>* probes, ReducedModel& result) {
+  const std::vector<scene::ProbeSection>& sections = scene.transient->probes;
+  std::vector<reduced::OutputPoint> outputs;
+  result.output_offsets = VectorX::Zero(3 * static_cast<Index>(sections.size()));
+  for (std::size_t p = 0; p < sections.size(); ++p) {
+    reduced::OutputPoint point;
+    if (probes) {
+      const transient::Probe& placed = (*probes)[p];
+      point.node = placed.node;
+      point.minus_node = placed.minus_node;
+      point.frame = placed.frame;
+      if (placed.opening()) result.output_offsets[3 * static_cast<Index>(p)] = placed.initial_gap;
+    } else {
+      point.node = transient::nearest_node(model.mesh, sections[p].point);
+    }
+    outputs.push_back(point);
+    static const char* opening_names[3] = {"gap", "slip_1", "slip_2"};
+    for (int c = 0; c < 3; ++c) {
+      result.output_names.push_back(sections[p].name + " " +
+                                    (point.minus_node >= 0 ? std::string(opening_names[c]) : std::string("u_") + axis_name(c)));
+    }
+  }
+  return outputs;
+}
+
+/// Per probe, the index of an opening probe's pair among the reduced model's pairs (-1 otherwise).
+void find_probe_pairs(const mesh::Mesh& mesh, bool with_pairs, const std::vector<transient::Probe>* probes,
+                      ReducedModel& result) {
+  const std::vector<mesh::CrackPair> pairs = with_pairs ? reduced::split_pairs(mesh) : std::vector<mesh::CrackPair>{};
+  const std::size_t n_probes = result.output_names.size() / 3;
+  result.probe_pairs.assign(n_probes, -1);
+  for (std::size_t p = 0; probes && p < n_probes; ++p) {
+    for (std::size_t i = 0; i < pairs.size() && (*probes)[p].opening(); ++i) {
+      if (pairs[i].minus == (*probes)[p].minus_node) result.probe_pairs[p] = static_cast<Index>(i);
+    }
+  }
+}
+
 }  // namespace
 
 ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, double excitation_frequency_hz,
                                  const std::filesystem::path& cache_directory,
-                                 const transient::InitialConditions* initial) {
+                                 const transient::InitialConditions* initial,
+                                 const std::vector<transient::Probe>* probes) {
   if (!scene.transient) throw InputError(scene.file + ": transient: expected a section for the reduced model");
   Stopwatch clock;
   const scene::TransientSection& section = *scene.transient;
@@ -95,11 +137,7 @@ ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, 
   const bool friction = with_crack && scene.contact.model != "none" && contact_options.friction_coefficient > 0.0;
 
   ReducedModel result;
-  std::vector<Index> probe_nodes;
-  for (const scene::ProbeSection& probe : section.probes) {
-    probe_nodes.push_back(transient::nearest_node(model.mesh, probe.point));
-    for (int c = 0; c < 3; ++c) result.output_names.push_back(probe.name + " u_" + axis_name(c));
-  }
+  const std::vector<reduced::OutputPoint> outputs = output_points(scene, model, probes, result);
   const fem::LoadShape load = unit_load(scene, model, system);
   result.max_frequency_hz = max_frequency(scene, excitation_frequency_hz);
 
@@ -107,11 +145,11 @@ ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, 
   options.modes = section.reduced.modes;
   options.max_frequency_hz = result.max_frequency_hz;
   options.friction = friction;
-  const std::uint64_t key = reduced::reduction_key(system, probe_nodes, load, friction);
+  const std::uint64_t key = reduced::reduction_key(system, outputs, load, friction);
   std::optional<reduced::Reduction> reduction = cached(cache_directory, key, options.modes, options.max_frequency_hz);
   result.from_cache = reduction.has_value();
   if (!reduction) {
-    reduction = reduced::compute_reduction(system, options, probe_nodes, load);
+    reduction = reduced::compute_reduction(system, options, outputs, load);
     if (!cache_directory.empty()) reduced::store_cached_reduction(cache_directory, key, *reduction);
   }
   Index modes = reduction->n_computed_modes();
@@ -127,8 +165,14 @@ ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, 
     result.system.output_residual_pairs.setZero();
     result.system.output_residual_load.setZero();
   }
-  if (with_crack && scene.contact.model == "none") drop_pairs(result.system);
-  if (with_crack && scene.contact.model != "none") {
+  const bool with_pairs = with_crack && scene.contact.model != "none";
+  if (!with_pairs) drop_pairs(result.system);
+  find_probe_pairs(model.mesh, with_pairs, probes, result);
+  if (section.snapshots > 0) {
+    result.fields = std::make_unique<reduced::FieldRecovery>(system, *reduction, modes, load, amplitude, with_pairs,
+                                                             section.reduced.residual_flexibility);
+  }
+  if (with_pairs) {
     const contact::PenaltyChoice penalty = contact::choose_penalty(model.mesh, model.materials, contact_options);
     result.system.normal_penalty = penalty.normal_penalty;
     result.system.tangential_penalty = penalty.tangential_penalty;

@@ -4,13 +4,16 @@
 /// static solves) is cached by fingerprint in the --modal-cache folder, so a study over excitation
 /// frequency, amplitude or damping computes it once.
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "pipeline/model.hpp"
+#include "reduced/reduction.hpp"
 #include "reduced/system.hpp"
 #include "scene/scene.hpp"
 #include "transient/excitation.hpp"
+#include "transient/solver.hpp"
 
 namespace crackle::pipeline {
 
@@ -21,10 +24,18 @@ inline constexpr int kDefaultHarmonics = 5;
 
 /// The scene's reduced model (HYBRID.md §2) of the open variant: modes, residual flexibility at the
 /// crack pairs, the excitation's load shape (its amplitude included: a(t) is the dimensionless signal)
-/// and the probes (output row 3 p + c = probe p, component c).
+/// and the probes (output row 3 p + c = probe p, component c: a node's u_c, or for a crack-opening
+/// probe its gap less g0 (c = 0) and its two slips, in the full model's probe frame).
 struct ReducedModel {
   reduced::ReducedSystem system;
-  std::vector<std::string> output_names;  ///< "tip u_x", "tip u_y", ... per output row
+  std::vector<std::string> output_names;  ///< "tip u_x", "tip u_y", ... ("mouth gap", "mouth slip_1", ...) per output row
+  VectorX output_offsets;   ///< added to the outputs: g0 on an opening probe's gap row, else 0
+  /// Per probe: the reduced model's pair of a crack-opening probe (its contact state), -1 for a node
+  /// probe or a model without pair rows (crack.contact.model: none: the state follows the gap).
+  std::vector<Index> probe_pairs;
+  /// Displacement fields over the DOFs for snapshots (made only when transient.snapshots.count > 0;
+  /// its factor of K is made at the first snapshot).
+  std::unique_ptr<reduced::FieldRecovery> fields;
   double max_frequency_hz = 0.0;
   int modes = 0;
   Index pairs = 0;
@@ -48,10 +59,12 @@ struct ReducedModel {
 /// `excitation_frequency_hz` (0 for a pulse) sets the automatic max_frequency. `initial`, when given,
 /// holds U(0), V(0) over the DOFs of the transient variant (transient.release, transient.initial):
 /// projected onto the retained modes. With crack.contact.model: none the pairs are left out (the open
-/// body alone). InputError for a scene without transient:, or an automatic max_frequency
-/// without a harmonic excitation.
+/// body alone). `probes`, when given, are the scene's probes placed as the full model places them
+/// (`side` copies, crack-opening pairs and frames); without them each probe is its nearest node.
+/// InputError for a scene without transient:, or an automatic max_frequency without a harmonic excitation.
 ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, double excitation_frequency_hz,
                                  const std::filesystem::path& cache_directory,
-                                 const transient::InitialConditions* initial = nullptr);
+                                 const transient::InitialConditions* initial = nullptr,
+                                 const std::vector<transient::Probe>* probes = nullptr);
 
 }  // namespace crackle::pipeline

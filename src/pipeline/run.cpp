@@ -724,8 +724,10 @@ class SnapshotWriter {
   SnapshotWriter(const std::filesystem::path& directory, const mesh::Mesh& mesh, const mesh::DofMap& dofs, int count,
                  Index n_steps, const distributed::MeshPartition* partition = nullptr)
       : directory_(directory), mesh_(mesh), dofs_(dofs), count_(count), n_steps_(n_steps), partition_(partition) {}
+  /// Whether on_step at this step writes a snapshot (a model that computes its field only when written asks first).
+  bool due(Index step) const { return next_ < count_ && step >= step_of(next_); }
   void on_step(const transient::StepView& view) {
-    if (next_ >= count_ || view.step < step_of(next_)) return;
+    if (!due(view.step)) return;
     io::PointField field{"displacement", 3, std::vector<double>(3 * static_cast<std::size_t>(mesh_.n_nodes()))};
     for (Index node = 0; node < mesh_.n_nodes(); ++node) {
       for (int c = 0; c < 3; ++c) field.values[3 * node + c] = view.displacement[dofs_.dof(node, c)];
@@ -829,13 +831,30 @@ struct ReducedRecords {
   std::vector<double> sample;   ///< 9 per probe: u, v, a (x, y, z each)
   VectorX previous_residual;    ///< residual (massless) part of the outputs at the previous sample
   VectorX previous_residual_rate;
+  Index probe_interval = 1;     ///< samples between probes.csv rows (transient.history.samples_per_period)
+  Index samples = 0;            ///< samples taken so far
 };
 
+/// Contact state of pair `pair` of the reduced model from its forces (as contact::PenaltyContact::pair_state):
+/// 0 open (no normal force), 2 closed and slipping (always without friction: the faces slide freely), 1
+/// closed and sticking (tangential force inside Coulomb's cone; on it, the return mapping's slip).
+int reduced_pair_state(const reduced::ReducedSystem& system, const VectorX& forces, Index pair) {
+  constexpr double kConeTolerance = 1e-9;  // relative: a force on the cone to round-off is slipping
+  const Index row = system.rows_per_pair() * pair;
+  const double normal = forces[row];
+  if (!(normal > 0.0)) return 0;
+  if (!system.friction || !(system.friction_coefficient > 0.0)) return 2;
+  const double tangential = std::hypot(forces[row + 1], forces[row + 2]);
+  return tangential < (1.0 - kConeTolerance) * system.friction_coefficient * normal ? 1 : 2;
+}
+
 /// The probe sample of the integrator's state: the modal part of v and a exactly, the massless
-/// residual part (C G_res (B^T p + f a)) by differences of successive samples.
-void reduced_sample(const reduced::ReducedIntegrator& integrator, const reduced::ReducedSystem& system, double h,
+/// residual part (C G_res (B^T p + f a)) by differences of successive samples; an opening probe's
+/// gap gets g0 and its pair's contact state.
+void reduced_sample(const reduced::ReducedIntegrator& integrator, const ReducedModel& reduced, double h,
                     ReducedRecords& records) {
-  const VectorX outputs = integrator.outputs();
+  const reduced::ReducedSystem& system = reduced.system;
+  const VectorX outputs = integrator.outputs() + reduced.output_offsets;
   const VectorX modal = system.output_modes * integrator.modal_displacement();
   const VectorX residual = outputs - modal;
   const bool first = records.previous_residual.size() == 0;
@@ -853,8 +872,16 @@ void reduced_sample(const reduced::ReducedIntegrator& integrator, const reduced:
   }
   records.previous_residual = residual;
   records.previous_residual_rate = rate;
+  if (records.samples++ % records.probe_interval != 0) return;
   records.probes.time.push_back(integrator.time());
   for (std::size_t k = 0; k < records.sample.size(); ++k) records.probes.values[k].push_back(records.sample[k]);
+  for (std::size_t p = 0; p < records.probes.names.size(); ++p) {
+    if (!records.probes.opening[p]) continue;
+    const Index pair = reduced.probe_pairs[p];
+    const double gap = records.sample[9 * p];
+    records.probes.states[p].push_back(pair >= 0 ? reduced_pair_state(system, integrator.pair_forces(), pair)
+                                                  : gap < 0.0 ? 2 : 0);
+  }
 }
 
 void reduced_energy_row(const reduced::ReducedIntegrator& integrator, double initial_total, ReducedRecords& records) {
@@ -904,8 +931,10 @@ transient::TransientSummary reduced_summary(const ReducedModel& reduced, const T
   return summary;
 }
 
-/// The time loop: sample (time t_i), feed the spectrum, step; energy rows every 10 steps.
-void march_reduced(reduced::ReducedIntegrator& integrator, const ReducedModel& reduced, Index n_steps, double dt,
+/// The time loop: sample (time t_i), feed the spectrum, step, then a snapshot when one is due (the
+/// displacement field recovered only then, at t_(i+1)); energy rows every 10 steps.
+void march_reduced(reduced::ReducedIntegrator& integrator, ReducedModel& reduced, Index n_steps, double dt,
+                   const reduced::ReducedIntegrator::LoadFunction& load, SnapshotWriter& snapshots,
                    std::optional<SpectrumMonitor>& spectrum, ReducedRecords& records,
                    transient::TransientSummary& summary) {
   constexpr Index kEnergyInterval = 10;
@@ -913,9 +942,10 @@ void march_reduced(reduced::ReducedIntegrator& integrator, const ReducedModel& r
   const VectorX empty;
   double closed = 0.0;
   for (Index i = 0; i < n_steps; ++i) {
-    reduced_sample(integrator, reduced.system, dt, records);
+    reduced_sample(integrator, reduced, dt, records);
     if (i % kEnergyInterval == 0) reduced_energy_row(integrator, initial_total, records);
-    const transient::StepView view{i, integrator.time(), dt, records.sample, empty, empty};
+    const double time = integrator.time();
+    const transient::StepView view{i, time, dt, records.sample, empty, empty};
     if (spectrum && spectrum->add(view)) {
       summary.status = "stopped";
       summary.message = "steady state reached";
@@ -923,6 +953,12 @@ void march_reduced(reduced::ReducedIntegrator& integrator, const ReducedModel& r
     }
     integrator.step();
     closed += integrator.closed_fraction();
+    if (reduced.fields && snapshots.due(i)) {
+      const VectorX field = reduced.fields->displacement(integrator.modal_displacement(),
+                                                         reduced.system.n_rows() > 0 ? integrator.pair_forces() : empty,
+                                                         load(integrator.time()));
+      snapshots.on_step(transient::StepView{i, time, dt, records.sample, field, empty});
+    }
   }
   summary.contact_fraction = integrator.n_steps_taken() > 0 ? closed / integrator.n_steps_taken() : 0.0;
 }
@@ -944,31 +980,42 @@ transient::ProbeHistory run_reduced_stage(const scene::Scene& scene, const Model
   Stopwatch clock;
   const transient::InitialConditions& initial = setup.problem.initial;
   const bool has_initial = initial.displacement.size() > 0 || initial.velocity.size() > 0;
-  ReducedModel reduced =
-      build_reduced_model(scene, model, setup.frequency, options.modal_cache, has_initial ? &initial : nullptr);
+  ReducedModel reduced = build_reduced_model(scene, model, setup.frequency, options.modal_cache,
+                                             has_initial ? &initial : nullptr, &setup.problem.probes);
   reduced.system.rayleigh_alpha = setup.settings.damping.alpha;
   reduced.system.rayleigh_beta = setup.settings.damping.beta;
   const int steps_per_period = section.reduced.steps_per_period;
   dt = reduced_step(reduced, steps_per_period, setup.frequency);
   const transient::Signal signal = setup.problem.loads.empty() ? transient::Signal{} : setup.problem.loads[0].signal;
   const bool loaded = !setup.problem.loads.empty();
-  reduced::ReducedIntegrator integrator(reduced.system, dt, [signal, loaded](double t) {
+  const reduced::ReducedIntegrator::LoadFunction load = [signal, loaded](double t) {
     return loaded ? signal.value(t) : 0.0;
-  });
+  };
+  reduced::ReducedIntegrator integrator(reduced.system, dt, load);
   integrator.set_initial_state(reduced.initial_displacement, reduced.initial_velocity);
   const double setup_s = clock.seconds();
   if (scene.spectrum && setup.frequency > 0.0) spectrum.emplace(scene, setup.frequency, dt);
   transient::TransientSummary summary = reduced_summary(reduced, setup, dt, setup_s);
   ReducedRecords records;
-  for (const scene::ProbeSection& probe : section.probes) records.probes.names.push_back(probe.name);
+  for (const transient::Probe& probe : setup.problem.probes) {
+    records.probes.names.push_back(probe.name);
+    records.probes.opening.push_back(probe.opening() ? 1 : 0);
+  }
   records.probes.values.assign(9 * section.probes.size(), {});
+  records.probes.states.assign(section.probes.size(), {});
   const Index n_steps = static_cast<Index>(std::ceil(setup.settings.end_time / dt - 1e-9));
+  records.probe_interval = probe_interval(scene, setup.frequency, dt);
+  check_run_outputs(scene, estimate_mesh(scene), static_cast<double>(n_steps),
+                    std::ceil(static_cast<double>(n_steps) / records.probe_interval), options.output_directory);
+  SnapshotWriter snapshots(options.output_directory, model.mesh, model.system(setup.variant)->dofs(),
+                           section.snapshots, n_steps);
+  for (const std::string& warning : setup.warnings) std::cerr << "crackle: warning: " << warning << "\n";
   Stopwatch run_clock;
   // The per-step products are small: Eigen's OpenMP threads would only spin between them.
   const int eigen_threads = Eigen::nbThreads();
   Eigen::setNbThreads(1);
   try {
-    march_reduced(integrator, reduced, n_steps, dt, spectrum, records, summary);
+    march_reduced(integrator, reduced, n_steps, dt, load, snapshots, spectrum, records, summary);
   } catch (const SolverError& error) {
     summary.status = "unstable";
     summary.message = error.what();
@@ -982,6 +1029,10 @@ transient::ProbeHistory run_reduced_stage(const scene::Scene& scene, const Model
   transient::write_probe_csv(directory / "probes.csv", records.probes);
   transient::write_energy_csv(directory / "energy.csv", records.energy);
   nlohmann::json json = reduced_transient_json(reduced, integrator, steps_per_period, summary);
+  json["probes"] = setup.probes_json;
+  json["probe_interval"] = records.probe_interval;
+  json["warnings"] = setup.warnings;
+  if (reduced.fields) json["snapshots"] = {{"count", section.snapshots}, {"static_factor", reduced.fields->factored()}};
   if (has_initial) {
     json["initial_state"] = {{"displacement_lost", reduced.initial_displacement_lost},
                              {"velocity_lost", reduced.initial_velocity_lost}};

@@ -21,7 +21,8 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr int kFirstModeCount = 12;
 /// Right-hand sides of one blocked static solve (n_free x kSolveBlock doubles, twice, in memory).
 constexpr Index kSolveBlock = 32;
-constexpr char kMagic[8] = {'C', 'R', 'K', 'R', 'E', 'D', 'U', '2'};
+/// File magic and key seed; version 3: output rows of relative points (opening probes) and frames.
+constexpr char kMagic[8] = {'C', 'R', 'K', 'R', 'E', 'D', 'U', '3'};
 
 /// One pair row of B: weights over free DOFs (sparse, at most 6 entries).
 struct Row {
@@ -38,7 +39,7 @@ struct Row {
 };
 
 /// Rows of B (pairs x directions) then of C (outputs), over the free DOFs.
-void build_rows(const fem::System& system, bool friction, const std::vector<Index>& output_nodes,
+void build_rows(const fem::System& system, bool friction, const std::vector<OutputPoint>& outputs,
                 std::vector<Row>& pair_rows, std::vector<Row>& output_rows, VectorX& areas) {
   const fem::Constraints& constraints = system.constraints();
   const mesh::DofMap& dofs = system.dofs();
@@ -70,10 +71,18 @@ void build_rows(const fem::System& system, bool friction, const std::vector<Inde
       pair_rows.push_back(std::move(row));
     }
   }
-  for (Index node : output_nodes) {
-    for (int c = 0; c < 3; ++c) {
+  for (const OutputPoint& point : outputs) {
+    for (int r = 0; r < 3; ++r) {
       Row row;
-      add_entry(row, node, c, 1.0);
+      for (int c = 0; c < 3; ++c) {
+        const double w = point.frame(r, c);
+        if (point.minus_node < 0) {
+          add_entry(row, point.node, c, w);
+        } else {
+          add_entry(row, point.minus_node, c, w);
+          add_entry(row, point.node, c, -w);
+        }
+      }
       output_rows.push_back(std::move(row));
     }
   }
@@ -215,7 +224,7 @@ VectorX Reduction::modal_coordinates(const VectorX& free_field, Index modes) con
 }
 
 Reduction compute_reduction(const fem::System& system, const ReductionOptions& options,
-                            const std::vector<Index>& output_nodes, const fem::LoadShape& load) {
+                            const std::vector<OutputPoint>& outputs, const fem::LoadShape& load) {
   const fem::Constraints& constraints = system.constraints();
   const int n_rigid = modal::count_rigid_body_modes(system.mesh(), system.dofs(), constraints);
   Reduction reduction;
@@ -235,7 +244,7 @@ Reduction compute_reduction(const fem::System& system, const ReductionOptions& o
 
   Stopwatch flexibility_clock;
   std::vector<Row> pair_rows, output_rows;
-  build_rows(system, options.friction, output_nodes, pair_rows, output_rows, reduction.pair_area);
+  build_rows(system, options.friction, outputs, pair_rows, output_rows, reduction.pair_area);
   const Index m = reduction.shapes.cols(), c = static_cast<Index>(pair_rows.size());
   const Index o = static_cast<Index>(output_rows.size());
   reduction.pair_modes.resize(c, m);
@@ -309,7 +318,7 @@ ReducedSystem reduced_system(const Reduction& reduction, Index modes, double loa
   return system;
 }
 
-std::uint64_t reduction_key(const fem::System& system, const std::vector<Index>& output_nodes,
+std::uint64_t reduction_key(const fem::System& system, const std::vector<OutputPoint>& outputs,
                             const fem::LoadShape& load, bool friction) {
   std::uint64_t hash = modal::kFingerprintSeed;
   mix(hash, kMagic, sizeof kMagic);
@@ -330,9 +339,13 @@ std::uint64_t reduction_key(const fem::System& system, const std::vector<Index>&
     mix(hash, pair.normal.data(), 3 * sizeof(double));
     mix(hash, &pair.area, sizeof pair.area);
   }
-  const std::int64_t n_outputs = static_cast<std::int64_t>(output_nodes.size());
+  const std::int64_t n_outputs = static_cast<std::int64_t>(outputs.size());
   mix(hash, &n_outputs, sizeof n_outputs);
-  mix(hash, output_nodes.data(), sizeof(Index) * output_nodes.size());
+  for (const OutputPoint& point : outputs) {
+    mix(hash, &point.node, sizeof point.node);
+    mix(hash, &point.minus_node, sizeof point.minus_node);
+    mix(hash, point.frame.data(), 9 * sizeof(double));
+  }
   mix(hash, load.dofs.data(), sizeof(Index) * load.dofs.size());
   mix(hash, load.values.data(), sizeof(double) * load.values.size());
   const char with_friction = friction ? 1 : 0;
@@ -386,6 +399,92 @@ void store_cached_reduction(const std::filesystem::path& directory, std::uint64_
     put(out, matrix);
   }
   io::write_file_atomic(cache_file(directory, key), out);
+}
+
+}  // namespace crackle::reduced
+
+namespace crackle::reduced {
+
+struct FieldRecovery::Impl {
+  const fem::System& system;
+  MatrixX shapes;         ///< Phi_m over the free DOFs
+  VectorX inverse_square; ///< 1 / omega_r^2 of the retained elastic modes, 0 for rigid ones
+  MatrixX rigid;          ///< every rigid-body mode of the reduction (for the elastic flexibility)
+  double lowest_elastic = 0.0;
+  VectorX mass;
+  VectorX load;           ///< f_hat over the free DOFs, scaled
+  std::vector<Row> pair_rows;
+  bool residual_flexibility = true;
+  std::unique_ptr<StaticFlexibility> flexibility;  ///< made at the first static part
+};
+
+FieldRecovery::FieldRecovery(const fem::System& system, const Reduction& reduction, Index modes,
+                             const fem::LoadShape& load, double load_scale, bool with_pairs,
+                             bool residual_flexibility)
+    : impl_(new Impl{system, {}, {}, {}, 0.0, {}, {}, {}, residual_flexibility, nullptr}) {
+  if (modes < 0 || modes > reduction.n_computed_modes() || reduction.shapes.rows() != system.constraints().n_free()) {
+    throw InputError("reduced model: field recovery of " + std::to_string(modes) + " modes over " +
+                     std::to_string(system.constraints().n_free()) + " free DOFs; the reduction has " +
+                     std::to_string(reduction.n_computed_modes()) + " modes over " +
+                     std::to_string(reduction.shapes.rows()) + " free DOFs");
+  }
+  Impl& d = *impl_;
+  d.shapes = reduction.shapes.leftCols(modes);
+  d.inverse_square = VectorX::Zero(modes);
+  for (Index r = 0; r < modes; ++r) {
+    const double w = reduction.omega[r];
+    if (w > 0.0) d.inverse_square[r] = 1.0 / (w * w);
+  }
+  Index n_rigid = 0;
+  while (n_rigid < reduction.omega.size() && !(reduction.omega[n_rigid] > 0.0)) ++n_rigid;
+  d.rigid = reduction.shapes.leftCols(n_rigid);
+  d.lowest_elastic = n_rigid < reduction.omega.size() ? reduction.omega[n_rigid] : 0.0;
+  d.mass = reduction.mass;
+  d.load = load_scale * fem::restrict_to_free(load.dense(system.n_dofs()), system.constraints());
+  if (with_pairs) {
+    std::vector<Row> no_outputs;
+    VectorX areas;
+    build_rows(system, reduction.friction, {}, d.pair_rows, no_outputs, areas);
+  }
+}
+
+FieldRecovery::~FieldRecovery() = default;
+FieldRecovery::FieldRecovery(FieldRecovery&&) noexcept = default;
+FieldRecovery& FieldRecovery::operator=(FieldRecovery&&) noexcept = default;
+
+bool FieldRecovery::factored() const { return impl_->flexibility != nullptr; }
+
+VectorX FieldRecovery::displacement(const VectorX& modal_displacement, const VectorX& pair_forces,
+                                    double load_value) {
+  Impl& d = *impl_;
+  if (modal_displacement.size() != d.shapes.cols() ||
+      (pair_forces.size() != 0 && pair_forces.size() != static_cast<Index>(d.pair_rows.size()))) {
+    throw InputError("reduced model: field of " + std::to_string(modal_displacement.size()) + " modal coordinates and " +
+                     std::to_string(pair_forces.size()) + " pair forces; the recovery has " +
+                     std::to_string(d.shapes.cols()) + " modes and " + std::to_string(d.pair_rows.size()) + " pair rows");
+  }
+  VectorX free_field = d.shapes * modal_displacement;
+  if (d.residual_flexibility) {
+    // b = B^T p + f_hat a, then G_res b = G_el b - Phi_m Omega_m^-2 Phi_m^T b.
+    VectorX rhs = load_value * d.load;
+    for (Index i = 0; i < pair_forces.size(); ++i) d.pair_rows[i].add_to(rhs, pair_forces[i]);
+    if (rhs.squaredNorm() > 0.0) {
+      const VectorX modal_part = d.shapes * d.inverse_square.cwiseProduct(d.shapes.transpose() * rhs);
+      if (!d.flexibility) {
+        const fem::Constraints& constraints = d.system.constraints();
+        const SparseMatrix stiffness = fem::restrict_to_free(d.system.assemble_stiffness(), constraints);
+        d.flexibility = std::make_unique<StaticFlexibility>(stiffness, diagonal(d.mass), d.rigid, d.lowest_elastic);
+      }
+      MatrixX block = rhs;
+      d.flexibility->apply(block);
+      free_field += block.col(0) - modal_part;
+    }
+  }
+  const fem::Constraints& constraints = d.system.constraints();
+  VectorX field = constraints.values;
+  if (field.size() != d.system.n_dofs()) field = VectorX::Zero(d.system.n_dofs());
+  for (Index k = 0; k < constraints.n_free(); ++k) field[constraints.free_dofs[k]] = free_field[k];
+  return field;
 }
 
 }  // namespace crackle::reduced

@@ -11,8 +11,11 @@
 /// n_DOF x n_c block: the static solves go one column at a time and only the rows B and C are kept.
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include "core/types.hpp"
 #include "fem/system.hpp"
@@ -30,6 +33,17 @@ struct ReductionOptions {
   /// cached reduction also serves later cases asking a little more (a study over frequency).
   double frequency_margin = 1.5;
   bool friction = false;  ///< 3 rows per pair (normal, two tangents) instead of 1
+};
+
+/// One output point of the reduction: three rows of C. A node point reads the node's displacement
+/// along the rows of `frame` (the identity: components x, y, z). A relative point (`minus_node` >= 0,
+/// a crack-opening probe) reads the pair's relative displacement u_minus - u_node along the rows of
+/// `frame` (n+, t1, t2: the normal gap less g0 and the two tangential slips, MODEL.md eqs. 9-10), so a
+/// frictionless model, whose B has normal rows only, still has the slips as outputs.
+struct OutputPoint {
+  Index node = 0;
+  Index minus_node = -1;
+  Eigen::Matrix3d frame = Eigen::Matrix3d::Identity();
 };
 
 /// The expensive part of a reduction, for M computed modes and c pair rows, o outputs.
@@ -67,10 +81,10 @@ std::pair<Vec3, Vec3> pair_tangents(const Vec3& normal);
 /// Computes modes and static images of `system`. A body (or a piece of it, e.g. a block cut off by the
 /// crack) free to move keeps its rigid-body modes as modes of frequency 0, first in the mode list, and
 /// the static images are those of the elastic flexibility (rigid motions projected out, HYBRID.md §2). Pairs: every split crack pair of the mesh when the variant is open,
-/// none otherwise. Outputs: 3 rows per node of `output_nodes` (components x, y, z; a held DOF
-/// gives a zero row). `load`: the load shape f_hat.
+/// none otherwise. Outputs: 3 rows per point of `outputs` (see OutputPoint; a held DOF
+/// gives a zero entry). `load`: the load shape f_hat.
 Reduction compute_reduction(const fem::System& system, const ReductionOptions& options,
-                            const std::vector<Index>& output_nodes, const fem::LoadShape& load);
+                            const std::vector<OutputPoint>& outputs, const fem::LoadShape& load);
 
 /// The ReducedSystem of the first m computed modes (m <= n_computed_modes()) with the residual
 /// flexibility of the rest; the load images scaled by `load_scale`. Contact (penalties, gap,
@@ -78,13 +92,41 @@ Reduction compute_reduction(const fem::System& system, const ReductionOptions& o
 ReducedSystem reduced_system(const Reduction& reduction, Index modes, double load_scale);
 
 /// Fingerprint of a reduction's inputs that do not depend on the mode count: K and the lumped
-/// mass over the free DOFs, the pair rows, the output rows, the load shape and the friction flag.
-std::uint64_t reduction_key(const fem::System& system, const std::vector<Index>& output_nodes,
+/// mass over the free DOFs, the pair rows, the output rows (nodes, relative pairs and frames), the
+/// load shape and the friction flag.
+std::uint64_t reduction_key(const fem::System& system, const std::vector<OutputPoint>& outputs,
                             const fem::LoadShape& load, bool friction);
 
 /// The cached reduction of this key in `directory`, or nullopt (absent, damaged or foreign file).
 std::optional<Reduction> load_cached_reduction(const std::filesystem::path& directory, std::uint64_t key);
 /// Stores a reduction atomically under its key.
 void store_cached_reduction(const std::filesystem::path& directory, std::uint64_t key, const Reduction& reduction);
+
+/// Displacement fields of a reduced model over all DOFs of its system (HYBRID.md §2), for snapshots:
+/// \f$u = \Phi_m q + G_{res}(B^T p + \hat f a)\f$, \f$G_{res} = G_{el} - \sum_{r \le m,\ \omega_r > 0}
+/// \phi_r\phi_r^T/\omega_r^2\f$ (G_el = K^-1, or the elastic flexibility of a free body as in
+/// compute_reduction). Cheap to make; the CHOLMOD factor of K is made once, at the first field with a
+/// static part, also when the reduction came from the cache. Borrows `system`.
+class FieldRecovery {
+ public:
+  /// The first `modes` modes of `reduction`; pair rows as compute_reduction made them (none when
+  /// `with_pairs` is false: the open body without contact); `load` the unit load shape, scaled by
+  /// `load_scale`; `residual_flexibility` false: u = Phi_m q only (the model without static correction).
+  FieldRecovery(const fem::System& system, const Reduction& reduction, Index modes, const fem::LoadShape& load,
+                double load_scale, bool with_pairs, bool residual_flexibility);
+  ~FieldRecovery();
+  FieldRecovery(FieldRecovery&&) noexcept;
+  FieldRecovery& operator=(FieldRecovery&&) noexcept;
+
+  /// u over the system's DOFs (held DOFs at their prescribed values) for modal coordinates q (m),
+  /// pair-row forces p (c, or empty without pairs) and load value a [m].
+  VectorX displacement(const VectorX& modal_displacement, const VectorX& pair_forces, double load_value);
+  /// Whether the factor of K has been made (the first displacement() with a static part makes it).
+  bool factored() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace crackle::reduced

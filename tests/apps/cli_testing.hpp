@@ -38,6 +38,24 @@ inline std::string cantilever(const std::string& cells, bool with_crack = true) 
   return text;
 }
 
+/// The forced run after cantilever("[10, 2, 1]"): a harmonic tip load of 20 N at 150 Hz (f1 about 200 Hz:
+/// the crack breathes every period), 5 % damping, 40 periods, the spectrum (3 harmonics, no
+/// steady-state stop) over the last 10; `probes` the entries of transient.probes.
+inline std::string forced_tip(const std::string& probes) {
+  return R"(transient:
+  excitation: {point: [0.2, 0.01, 0.01], direction: z, amplitude: 20.0, frequency: 150}
+  damping: {ratio: 0.05, at: 150}
+  periods: 40
+  progress: false
+  probes:
+)" + probes + R"(spectrum:
+  harmonics: 3
+  subharmonics: false
+  steady_state: {tolerance: 0, window_periods: 10}
+  plots: false
+)";
+}
+
 /// The cracked cantilever of cantilever("[10, 1, 2]") released from a static tip load of 50 N (the
 /// top crack pressed shut), no damping, crack.contact.model `contact`; modal with the lumped mass, the
 /// ring-down analysed (the pluck tests of the full and of the reduced transient).

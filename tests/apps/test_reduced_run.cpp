@@ -23,19 +23,7 @@ namespace {
 const std::string kBody = cli_testing::cantilever("[10, 2, 1]");
 
 /// Harmonic point load at the tip, 5 % damping, 40 periods, spectrum over the last 10.
-const char* kForced = R"(transient:
-  excitation: {point: [0.2, 0.01, 0.01], direction: z, amplitude: 20.0, frequency: 150}
-  damping: {ratio: 0.05, at: 150}
-  periods: 40
-  progress: false
-  probes:
-    - {name: tip, point: [0.2, 0.01, 0.01]}
-spectrum:
-  harmonics: 3
-  subharmonics: false
-  steady_state: {tolerance: 0, window_periods: 10}
-  plots: false
-)";
+const std::string kForced = cli_testing::forced_tip("    - {name: tip, point: [0.2, 0.01, 0.01]}\n");
 
 /// A short tip pulse, then free vibration without damping.
 const char* kPulse = R"(transient:
