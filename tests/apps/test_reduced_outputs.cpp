@@ -150,6 +150,34 @@ constexpr double kSteadyFrom = 30.0 / 150.0;  // the last 10 periods [s]
 
 }  // namespace
 
+// With Coulomb friction on the crack (mu = 0.3), the reduced model's pair solve (semi-smooth Newton
+// on the condensed pair equations) gives the opening probe and its stick/open states of the full
+// model: the same signature targets, and the shares of open and stuck rows within 2 %.
+TEST(ReducedOutputs, OpeningProbeWithFrictionMatchesTheFullModel) {
+  const std::string rest = "  contact: {friction: 0.3}\n" + kBreathing;  // kBody ends with the crack
+  crackle_run("friction-full", rest, "");
+  crackle_run("friction-reduced", rest, "--set transient.model=reduced");
+  const double a1_full = harmonic("friction-full", "mouth", 1), a1 = harmonic("friction-reduced", "mouth", 1);
+  const double r2_full = harmonic("friction-full", "mouth", 2) / a1_full;
+  const double r2 = harmonic("friction-reduced", "mouth", 2) / a1;
+  auto full = read_probes("friction-full", kSteadyFrom), reduced = read_probes("friction-reduced", kSteadyFrom);
+  const std::string state = "mouth state [0 open 1 stick 2 slip]";
+  auto share = [&](const std::vector<double>& states, double value) {
+    return static_cast<double>(std::count(states.begin(), states.end(), value)) / static_cast<double>(states.size());
+  };
+  std::printf("friction: gap A1 %.5e / %.5e, A2/A1 %.5f / %.5f, open %.4f / %.4f, stick %.4f / %.4f (reduced / full)\n",
+              a1, a1_full, r2, r2_full, share(reduced[state], 0.0), share(full[state], 0.0), share(reduced[state], 1.0),
+              share(full[state], 1.0));
+  EXPECT_LT(std::abs(a1 / a1_full - 1.0), 1e-2);
+  EXPECT_LT(std::abs(r2 / r2_full - 1.0), 2e-2);
+  EXPECT_GT(share(full[state], 1.0), 0.1) << "the closed faces must stick";
+  EXPECT_LT(std::abs(share(reduced[state], 0.0) - share(full[state], 0.0)), 2e-2);
+  EXPECT_LT(std::abs(share(reduced[state], 1.0) - share(full[state], 1.0)), 2e-2);
+  const nlohmann::json transient = read_json(scratch() / "friction-reduced" / "transient.json");
+  EXPECT_EQ(transient["status"], "completed");
+  EXPECT_GT(transient["penalty"]["friction"].get<double>(), 0.0);
+}
+
 // The reduced model's opening probe is the gap of one of its own pairs (g0 + B Phi q + R p + r_f a):
 // its harmonics, mean and contact fraction meet the signature targets against the full model
 // (A1 1 %, A2/A1 2 %, A3/A1 5 %), and the slip (a relative output row: the model is frictionless,
