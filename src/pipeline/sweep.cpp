@@ -555,10 +555,15 @@ spectral::PlotResult plot_sweep(const std::filesystem::path& png, const SweepRes
   for (const SweepPoint& point : result.points) largest = std::max(largest, amplitude_of(point, probe, nu, nu));
   const double floor = largest > 0.0 ? 1e-12 * largest : 1e-300;
   // Stable runs in data block 0, unstable runs in block 1, each run carried on to the next one's first point.
+  // An order below the floor (round-off, or A1/2 of a period-one point) is not drawn (nan): on the log
+  // scale it would pull the axis down to the round-off.
   std::string blocks[2];
   const auto row = [&](const SweepPoint& point) {
     std::string line = number_text(point.frequency_hz());
-    for (int k : orders) line += " " + number_text(std::max(amplitude_of(point, probe, k, nu), floor));
+    for (int k : orders) {
+      const double amplitude = amplitude_of(point, probe, k, nu);
+      line += " " + (amplitude > floor ? number_text(amplitude) : std::string("nan"));
+    }
     return line + "\n";
   };
   int current = 0;
@@ -586,7 +591,7 @@ spectral::PlotResult plot_sweep(const std::filesystem::path& png, const SweepRes
   const double low = std::min(settings.from_hz, settings.to_hz), high = std::max(settings.from_hz, settings.to_hz);
   body += "set xrange [" + number_text(low) + ":" + number_text(high) + "]\n";
   if (settings.bilinear_hz > 0.0) {
-    for (const auto& [divisor, label] : std::vector<std::pair<double, std::string>>{{2, "f_b/2"}, {3, "f_b/3"}, {1, "f_b"}}) {
+    for (const auto& [divisor, label] : std::vector<std::pair<double, std::string>>{{2, "f_b/2"}, {3, "f_b/3"}, {1, "f_b"}, {0.5, "2 f_b"}}) {
       const double x = settings.bilinear_hz / divisor;
       if (x < low || x > high) continue;
       body += "set arrow from " + number_text(x) + ", graph 0 to " + number_text(x) +
