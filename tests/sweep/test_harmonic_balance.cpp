@@ -593,18 +593,30 @@ TEST(Continuation, FoldOfAHardeningClearanceOscillator) {
   EXPECT_LT(std::min(std::abs(ti_mid - a_high) / a_high, std::abs(ti_mid - a_low) / a_low), 1e-3);
 }
 
+/// The bilinear oscillator of the period-doubling tests: closed at rest (g0 = 0), open w = 1, closed
+/// w = 2 (bilinear frequency 4/3), 1 % damping; its period-one branch over 2.0 .. 2.6 rad/s, H = 10.
+struct DoublingOscillator {
+  reduced::ReducedSystem s = one_dof(1.0, 0.01, 1.0, 0.0, 1e-6, 0.0, 3.0, 0.0);
+  HarmonicBalanceOptions opt1 = [] {
+    HarmonicBalanceOptions options;
+    options.harmonics = 10;
+    return options;
+  }();
+  HarmonicBalance hb1{s, opt1};
+  ContinuationOptions copt = [] {
+    ContinuationOptions options;
+    options.initial_step = 0.02;
+    options.max_step = 0.02;
+    return options;
+  }();
+  std::vector<BranchPoint> branch = continue_branch(hb1, 2.0, 2.6, copt);
+};
+
 TEST(Continuation, PeriodDoublingOfABilinearOscillator) {
-  // Closed at rest (g0 = 0), open w = 1, closed w = 2: bilinear frequency 4/3. Driven near twice
-  // that, the period-one response loses stability through -1 and a period-two response (A1/2)
-  // takes over (the time integration below settles on it).
-  const auto s = one_dof(1.0, 0.01, 1.0, 0.0, 1e-6, 0.0, 3.0, 0.0);
-  HarmonicBalanceOptions opt1;
-  opt1.harmonics = 10;
-  HarmonicBalance hb1(s, opt1);
-  ContinuationOptions copt;
-  copt.initial_step = 0.02;
-  copt.max_step = 0.02;
-  const auto branch = continue_branch(hb1, 2.0, 2.6, copt);
+  // Driven near twice the bilinear frequency, the period-one response loses stability through -1 and
+  // a period-two response (A1/2) takes over (the time integration below settles on it).
+  const DoublingOscillator oscillator;
+  const auto& [s, opt1, hb1, copt, branch] = oscillator;
   std::size_t doubling = branch.size();
   int n_doubling = 0, n_fold = 0;
   for (std::size_t i = 0; i < branch.size(); ++i) {
@@ -679,14 +691,8 @@ TEST(Continuation, BranchOffAtAPeriodDoublingReachesTheFixedFrequencySolution) {
   // nu = 2 harmonics, Keller's corrector along the critical mode (Omega free) lands on the period-two
   // branch at the requested distance; continued from there, the branch passes Omega = 2.5 through the
   // solution that Newton finds at that fixed frequency from the critical mode: two routes, one solution.
-  const auto s = one_dof(1.0, 0.01, 1.0, 0.0, 1e-6, 0.0, 3.0, 0.0);
-  HarmonicBalanceOptions opt1;
-  opt1.harmonics = 10;
-  HarmonicBalance hb1(s, opt1);
-  ContinuationOptions copt;
-  copt.initial_step = 0.02;
-  copt.max_step = 0.02;
-  const auto branch = continue_branch(hb1, 2.0, 2.6, copt);
+  const DoublingOscillator oscillator;
+  const auto& [s, opt1, hb1, copt, branch] = oscillator;
   std::size_t doubling = 0;
   while (doubling < branch.size() && !branch[doubling].period_doubling) ++doubling;
   ASSERT_LT(doubling, branch.size());
