@@ -131,8 +131,8 @@ std::string unexpected_argument(const CLI::App& command, const std::vector<std::
   return name + ": unexpected argument '" + rest.front() + "' (it takes one scene file); see " + name + " --help";
 }
 
-/// `crackle run` is one process: under an MPI launcher with more than one rank, every rank would
-/// run the whole job into the same folder. The launcher's environment tells before PETSc starts.
+/// Ranks of the MPI launcher that started this process, from its environment (before PETSc starts):
+/// `crackle run` then starts PETSc at once and spreads its transient over the ranks.
 int mpi_world_size() {
   for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"}) {
     const char* value = std::getenv(name);
@@ -222,7 +222,7 @@ int main(int argc, char** argv) {
   CLI::App* run_command = cli.add_subcommand(
       "run", "The scene's pipeline: modal (only if a mode is referred to or modal: is given) -> transient "
              "(explicit dynamics with crack-face contact) -> spectrum (harmonics, damage indices, plots). "
-             "One process: not under mpirun -np N with N > 1 (use crackle study for many runs)");
+             "Under mpirun -np N the full transient is spread over the N ranks (rank 0 writes the files)");
   run_command->add_option("scene", run.scene_path, "Scene file (YAML)")->required();
   run_command->add_option("--set", run.overrides, "Override a scene value: --set key.path=value (repeatable)");
   run_command->add_option("-o,--output", run.output_directory, "Output directory")->capture_default_str();
@@ -312,6 +312,7 @@ int main(int argc, char** argv) {
                             ": unexpected arguments after -- (only modal and run take PETSc options)");
   }
 
+  bool quiet_rank = false;  // a rank of crackle run under mpirun other than 0: its errors are rank 0's
   try {
     if (*check_command) pipeline::run_check(check, std::cout);
     if (*modal_command) {
@@ -320,24 +321,17 @@ int main(int argc, char** argv) {
       pipeline::run_modal_command(modal, std::cout);
     }
     if (*run_command) {
-      if (const int ranks = mpi_world_size(); ranks > 1) {
-        // Every rank exits with the same code; only rank 0 says why.
-        if (mpi_world_rank() == 0) {
-          std::cerr << "crackle: error: crackle run is a single-process job, got " << ranks
-                    << " MPI processes (each would run the whole job into the same folder); run it "
-                       "without mpirun (crackle modal runs under mpirun; crackle study spreads cases over "
-                       "the ranks)\n";
-        }
-        return kExitBadInput;
-      }
       run.progress = !quiet;
       PetscArguments petsc(arguments.own.front(), run_petsc, arguments.petsc);
       // PETSc starts when the modal stage first solves with SLEPc (a cached or ARPACK run never
-      // pays MPI's start-up); given PETSc options, at once, so that they are read and checked.
+      // pays MPI's start-up); given PETSc options, at once, so that they are read and checked; under
+      // mpirun -np N > 1 at once: the ranks share one transient (rank 0 writes and prints, errors
+      // are agreed, so every rank exits with the same code and only rank 0 says why).
       const bool options_given = !run_petsc.empty() || !arguments.petsc.empty();
+      quiet_rank = mpi_world_size() > 1 && mpi_world_rank() != 0;
       modal::SlepcSession session(petsc.argc(), petsc.argv(),
-                                  options_given ? modal::SlepcSession::Start::now
-                                                : modal::SlepcSession::Start::on_first_use);
+                                  options_given || mpi_world_size() > 1 ? modal::SlepcSession::Start::now
+                                                                        : modal::SlepcSession::Start::on_first_use);
       pipeline::run_run_command(run, std::cout);
     }
     if (*sweep_command) {
@@ -352,6 +346,7 @@ int main(int argc, char** argv) {
     }
     if (*format_command) std::cout << scene::scene_format_markdown();
   } catch (const std::bad_alloc&) {
+    if (quiet_rank) return kExitOutOfMemory;
     // The estimates refuse what surely cannot fit; what they miss (solver workspace, other
     // processes taking the memory meanwhile) ends here, with a line that says what happened.
     std::string source;
@@ -361,7 +356,7 @@ int main(int argc, char** argv) {
               << "); use a coarser mesh (mesh.box.cells, mesh.box.order), fewer modes or a shorter run\n";
     return kExitOutOfMemory;
   } catch (const std::exception& error) {
-    std::cerr << "crackle: error: " << error.what() << "\n";
+    if (!quiet_rank) std::cerr << "crackle: error: " << error.what() << "\n";
     return exit_code_for(error);
   }
   return 0;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <new>
 #include <string>
 
 #include "core/errors.hpp"
@@ -110,6 +111,53 @@ std::vector<int> partition_elements(const mesh::Mesh& mesh, int ranks) {
   MatPartitioningDestroy(&partitioning);
   MatDestroy(&adjacency);
   return element_rank;
+}
+
+void agree(std::exception_ptr error) {
+  const int rank = world_rank(), size = world_size();
+  int code = 0;
+  std::string text;
+  if (error) {
+    try {
+      std::rethrow_exception(error);
+    } catch (const std::bad_alloc&) {
+      code = -1;  // rethrown as std::bad_alloc on every rank
+    } catch (const std::exception& failure) {
+      code = exit_code_for(failure);
+      text = failure.what();
+    } catch (...) {
+      code = 1;
+      text = "unknown error";
+    }
+  }
+  int mine = error ? rank : size, first = size;
+  MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, PETSC_COMM_WORLD);
+  if (first == size) return;
+  if (rank == first) text = first > 0 ? "rank " + std::to_string(first) + ": " + text : text;
+  int header[2] = {code, static_cast<int>(text.size())};
+  MPI_Bcast(header, 2, MPI_INT, first, PETSC_COMM_WORLD);
+  text.resize(static_cast<std::size_t>(header[1]));
+  MPI_Bcast(text.data(), header[1], MPI_CHAR, first, PETSC_COMM_WORLD);
+  if (rank == first) std::rethrow_exception(error);
+  switch (header[0]) {  // exit_code_for's codes
+    case 2: throw InputError(text);
+    case 3: throw SolverError(text);
+    case 4: throw IoError(text);
+    case -1: throw std::bad_alloc();
+    default: throw Error(text);
+  }
+}
+
+PartitionBalance MeshPartition::balance() const {
+  const HaloCounts counts = halo_counts();
+  const std::vector<double> mine{static_cast<double>(local_.n_elements()), static_cast<double>(counts.owned_dofs),
+                                 static_cast<double>(counts.ghost_dofs), counts.bytes_per_step};
+  std::vector<double> low(mine.size()), high(mine.size()), total(mine.size());
+  MPI_Allreduce(mine.data(), low.data(), 4, MPI_DOUBLE, MPI_MIN, PETSC_COMM_WORLD);
+  MPI_Allreduce(mine.data(), high.data(), 4, MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);
+  MPI_Allreduce(mine.data(), total.data(), 4, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  const auto spread = [&](int k) { return Spread{low[k], high[k], total[k] / ranks_}; };
+  return {spread(0), spread(1), spread(2), spread(3)};
 }
 
 MeshPartition::MeshPartition(const mesh::Mesh& global, std::vector<int> element_rank)

@@ -13,6 +13,7 @@
 /// elements touch one node of a pair also holds the other as a ghost and evaluates the pair
 /// alike (ghost pairs are left out of the sums). Box and Gmsh meshes, hexahedra (matrix-free) and
 /// tetrahedra (the local assembled K) alike; the `open` DOF map only (DOF = 3 node + component).
+#include <exception>
 #include <memory>
 #include <vector>
 
@@ -30,6 +31,24 @@ namespace crackle::distributed {
 int world_rank();
 int world_size();
 
+/// Collective over PETSC_COMM_WORLD: every rank passes its own error (null: none). When some rank
+/// failed, every rank throws the error of the lowest failing rank: that rank rethrows its own, the
+/// others the same type (by exit code: InputError, SolverError, IoError, std::bad_alloc) and text,
+/// prefixed with "rank R: " when R > 0. Else returns. One message, one exit code, no hang.
+void agree(std::exception_ptr error);
+
+/// Runs `work` on this rank and agrees on its outcome with the others (agree()).
+template <class Work>
+void collectively(Work&& work) {
+  std::exception_ptr error;
+  try {
+    work();
+  } catch (...) {
+    error = std::current_exception();
+  }
+  agree(error);
+}
+
 /// The rank of each element from PT-Scotch (PETSc MatPartitioning, type ptscotch unless
 /// -mat_partitioning_type says otherwise) on the element dual graph (elements sharing a face),
 /// for `ranks` parts; every rank gets the whole vector. Collective. InputError (on every rank,
@@ -44,6 +63,17 @@ struct HaloCounts {
   /// Bytes this rank sends and receives per step: ghost DOFs x 8 bytes, twice (the scatter-add of
   /// the element shares, then the completed sums back to the ghosts).
   double bytes_per_step = 0.0;
+};
+
+/// min, max and mean over the ranks of a per-rank count.
+struct Spread {
+  double min = 0.0, max = 0.0, mean = 0.0;
+};
+
+/// How even a partition is, and its halo traffic (transient.json's "partition").
+struct PartitionBalance {
+  Spread elements, owned_dofs, ghost_dofs;
+  Spread halo_bytes_per_step;  ///< HaloCounts::bytes_per_step
 };
 
 /// This rank's share of a mesh partition, and the transient::Distribution of a run over it.
@@ -68,6 +98,8 @@ class MeshPartition final : public transient::Distribution {
   /// Local node of a global node that this rank owns, else -1 (a probe's node).
   Index owned_node(Index global_node) const;
   HaloCounts halo_counts() const;
+  /// Collective: the balance over all ranks (every rank gets it).
+  PartitionBalance balance() const;
   /// Wall time spent in complete() and sum() so far [s]: transfers and waiting for the other ranks.
   double communication_seconds() const { return communication_seconds_; }
 
@@ -87,6 +119,7 @@ class MeshPartition final : public transient::Distribution {
   const std::vector<Index>& global_dofs() const override { return global_dofs_; }
   void complete(VectorX& local) const override;
   void sum(std::vector<double>& values) const override;
+  void agree(std::exception_ptr error) const override { distributed::agree(error); }
 
  private:
   const mesh::Mesh* global_;

@@ -150,6 +150,19 @@ std::string check_crack(const BoxSpec& box, const CrackSpec& crack) {
   return "";
 }
 
+std::array<std::vector<double>, 3> crack_fronts(const BoxSpec& box, const CrackSpec& crack) {
+  std::array<std::vector<double>, 3> fronts;
+  for (int t : in_plane_axes(crack.normal)) {
+    const double low = box.origin[t], high = low + box.size[t];
+    for (double edge : crack.region[t]) {
+      if (edge > low + tolerance(box, t) && edge < high - tolerance(box, t)) fronts[t].push_back(edge);
+    }
+    std::sort(fronts[t].begin(), fronts[t].end());
+  }
+  if (!fronts[0].empty() || !fronts[1].empty() || !fronts[2].empty()) fronts[crack.normal].push_back(crack.at);
+  return fronts;
+}
+
 Grading resolve_grading(const BoxSpec& box, const CrackSpec& crack) {
   Grading grading = box.grading;
   if (grading.layers != kAutoLayers) return grading;
@@ -179,22 +192,18 @@ std::array<std::vector<double>, 3> grid_lines(const BoxSpec& box, const std::opt
     for (double edge : crack->region[t]) add_line(t, edge);
   }
   if (box.grading.layers == 0) return lines;
-  // Grading towards the front: the crack plane along the normal (only if part of the crack's edge
-  // is a front), and each front edge (an edge inside the body) along its in-plane axis.
-  const int normal = crack->normal;
-  const std::array<std::vector<double>, 3> base = lines;
-  std::vector<std::pair<int, double>> fronts;
-  for (int t : in_plane_axes(normal)) {
-    const double low = box.origin[t], high = low + box.size[t];
-    for (double edge : crack->region[t]) {
-      if (edge > low + tolerance(box, t) && edge < high - tolerance(box, t)) fronts.push_back({t, edge});
+  std::array<std::vector<double>, 3> fronts = crack_fronts(box, *crack);
+  for (int axis = 0; axis < 3; ++axis) {
+    for (double position : box.grading.fronts[axis]) {
+      const double low = box.origin[axis], high = low + box.size[axis], tol = tolerance(box, axis);
+      if (position > low + tol && position < high - tol) fronts[axis].push_back(position);
     }
   }
-  if (fronts.empty()) return lines;
-  fronts.push_back({normal, crack->at});
+  const std::array<std::vector<double>, 3> base = lines;
   const Grading grading = resolve_grading(box, *crack);
-  for (const auto& [axis, position] : fronts)
-    add_graded_lines(base[axis], lines[axis], position, grading, tolerance(box, axis));
+  for (int axis = 0; axis < 3; ++axis)
+    for (double position : fronts[axis])
+      add_graded_lines(base[axis], lines[axis], position, grading, tolerance(box, axis));
   return lines;
 }
 

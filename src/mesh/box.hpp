@@ -25,6 +25,9 @@ struct CrackSpec {
 struct Grading {
   int layers = 0;       ///< 0: no grading; kAutoLayers: auto_layers()
   double ratio = 0.2;   ///< in (0, 1)
+  /// Further positions to grade towards along each axis, besides the crack's own front [m]: a
+  /// study puts the fronts of all its cases here, so that every case gets the same mesh.
+  std::array<std::vector<double>, 3> fronts;
 };
 inline constexpr int kAutoLayers = -1;
 inline constexpr int kMaxAutoLayers = 4;
@@ -49,13 +52,18 @@ struct BoxSpec {
   Grading grading;
 };
 
+/// The positions a crack's grading is towards: each front edge (an edge of the crack rectangle
+/// strictly inside the body) along its in-plane axis, and the crack plane along the normal when
+/// there is a front edge at all (a crack through the whole section has no front). Per axis, ascending.
+std::array<std::vector<double>, 3> crack_fronts(const BoxSpec& box, const CrackSpec& crack);
+
 /// box.grading with automatic layers resolved for this crack (auto_layers).
 Grading resolve_grading(const BoxSpec& box, const CrackSpec& crack);
 
 /// Grid-line positions along each axis: the uniform lines of `box`, its extra lines, the lines
 /// that crack edges need (a crack edge strictly inside a cell splits that cell), then box.grading's
-/// layers towards every crack front (the crack plane along the normal, and each front edge along the
-/// in-plane axis across it).
+/// layers towards every crack front (crack_fronts(), and box.grading.fronts), each graded from the
+/// lines before grading, so that the result does not depend on the order of the fronts.
 std::array<std::vector<double>, 3> grid_lines(const BoxSpec& box, const std::optional<CrackSpec>& crack);
 
 /// What is wrong with a crack in a box, or an empty string if nothing is. The first word of the

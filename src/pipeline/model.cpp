@@ -21,7 +21,7 @@ constexpr double kRegionTolerance = 1e-9;
 
 mesh::Grading box_grading(const scene::Scene& scene, MeshUse use) {
   const std::string& mode = scene.grading.mode;
-  if (mode == "none" || (mode == "auto" && use == MeshUse::transient)) return {0, 0.2};
+  if (mode == "none" || (mode == "auto" && use == MeshUse::transient)) return mesh::Grading{};
   return scene.grading.grading;
 }
 

@@ -9,6 +9,7 @@
 #include <set>
 
 #include "pipeline/commands.hpp"
+#include "pipeline/distributed_run.hpp"
 #include "core/errors.hpp"
 #include "core/resources.hpp"
 #include "io/csv.hpp"
@@ -194,6 +195,9 @@ struct TransientSetup {
   std::optional<ReleaseReport> release;            ///< how U(0) was made from transient.release
   nlohmann::json probes_json = nlohmann::json::array();  ///< per probe: name, node, snapping distance
   std::vector<std::string> warnings;  ///< found while setting up (for transient.json and stderr)
+  /// Under mpirun -np N > 1: this rank's share of the full transient (the problem above is the
+  /// whole body's, from which it is made).
+  std::unique_ptr<DistributedTransient> distributed;
 };
 
 /// The excitation as a load, and its frequency (0 for a pulse).
@@ -715,25 +719,33 @@ void write_ringdown_spectrum(const scene::Scene& scene, const fs::path& director
 /// a time series, also of a run that failed halfway).
 class SnapshotWriter {
  public:
-  SnapshotWriter(const std::filesystem::path& directory, const Model& model, const mesh::DofMap& dofs, int count,
-                 Index n_steps)
-      : directory_(directory), model_(model), dofs_(dofs), count_(count), n_steps_(n_steps) {}
+  /// `mesh` and `dofs`: the run's (a distributed run's: the rank's local mesh and DOF map, whose
+  /// `partition` then writes one piece per rank and a .pvtu per snapshot).
+  SnapshotWriter(const std::filesystem::path& directory, const mesh::Mesh& mesh, const mesh::DofMap& dofs, int count,
+                 Index n_steps, const distributed::MeshPartition* partition = nullptr)
+      : directory_(directory), mesh_(mesh), dofs_(dofs), count_(count), n_steps_(n_steps), partition_(partition) {}
   void on_step(const transient::StepView& view) {
     if (next_ >= count_ || view.step < step_of(next_)) return;
-    const mesh::Mesh& mesh = model_.mesh;
-    io::PointField field{"displacement", 3, std::vector<double>(3 * static_cast<std::size_t>(mesh.n_nodes()))};
-    for (Index node = 0; node < mesh.n_nodes(); ++node) {
+    io::PointField field{"displacement", 3, std::vector<double>(3 * static_cast<std::size_t>(mesh_.n_nodes()))};
+    for (Index node = 0; node < mesh_.n_nodes(); ++node) {
       for (int c = 0; c < 3; ++c) field.values[3 * node + c] = view.displacement[dofs_.dof(node, c)];
     }
-    char name[32];
-    std::snprintf(name, sizeof name, "snapshot_%04d.vtu", next_);
-    io::write_vtu(directory_ / name, mesh, {field});
+    char stem[32];
+    std::snprintf(stem, sizeof stem, "snapshot_%04d", next_);
+    std::string name = std::string(stem) + ".vtu";
+    if (partition_) {
+      name = write_snapshot_pieces(directory_, stem, *partition_, field);
+    } else {
+      io::write_vtu(directory_ / name, mesh_, {field});
+    }
     // The displacement is U(i+1), at t_(i+1).
     collection_ += "    <DataSet timestep=\"" + format_number(view.time + view.dt) + "\" group=\"\" part=\"0\" file=\"" +
                    name + "\"/>\n";
-    io::write_file_atomic(directory_ / "snapshots.pvd",
-                          "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n" +
-                              collection_ + "  </Collection>\n</VTKFile>\n");
+    on_writer_rank([&] {
+      io::write_file_atomic(directory_ / "snapshots.pvd",
+                            "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n" +
+                                collection_ + "  </Collection>\n</VTKFile>\n");
+    });
     ++next_;
   }
 
@@ -745,10 +757,11 @@ class SnapshotWriter {
   }
 
   std::filesystem::path directory_;
-  const Model& model_;
+  const mesh::Mesh& mesh_;
   const mesh::DofMap& dofs_;
   int count_ = 0;
   Index n_steps_ = 0;
+  const distributed::MeshPartition* partition_ = nullptr;
   int next_ = 0;
   std::string collection_;
 };
@@ -759,31 +772,51 @@ std::unique_ptr<transient::TransientSolver> run_transient_stage(const scene::Sce
                                                                 TransientSetup& setup, const fs::path& directory,
                                                                 std::optional<SpectrumMonitor>& spectrum) {
   const scene::TransientSection& section = *scene.transient;
-  auto solver = std::make_unique<transient::TransientSolver>(model.system(setup.variant), setup.problem, setup.settings);
+  std::unique_ptr<transient::TransientSolver> solver;
+  const distributed::MeshPartition* partition = nullptr;
+  if (run_ranks() > 1) {
+    if (setup.variant != mesh::Variant::open && model.mesh.has_crack()) {
+      throw InputError(scene.where("transient.variant") + ": expected open under mpirun -np " +
+                       std::to_string(run_ranks()) + " (the distributed run keeps the crack faces split), got uncracked");
+    }
+    const contact::ContactOptions contact_options = scene_contact_options(scene);
+    setup.distributed = std::make_unique<DistributedTransient>(
+        distribute_transient(model, setup.problem, setup.contact ? &contact_options : nullptr));
+    partition = setup.distributed->partition.get();
+    solver = std::make_unique<transient::TransientSolver>(partition->local_mesh(), setup.distributed->problem,
+                                                          setup.settings);
+  } else {
+    solver = std::make_unique<transient::TransientSolver>(model.system(setup.variant), setup.problem, setup.settings);
+  }
   // The time step is known once the solver is set up: decimate probes.csv, and check the histories
   // and the snapshots against the memory and the disk before the first step.
   const Index finished_interval = probe_interval(scene, setup.frequency, solver->dt());
   solver->set_probe_interval(finished_interval);
   const double steps = static_cast<double>(solver->n_steps());
-  check_run_outputs(scene, estimate_mesh(scene), steps, std::ceil(steps / finished_interval), directory);
+  on_every_rank([&] { check_run_outputs(scene, estimate_mesh(scene), steps, std::ceil(steps / finished_interval), directory); });
   if (scene.spectrum && setup.frequency > 0.0) spectrum.emplace(scene, setup.frequency, solver->dt());
-  SnapshotWriter snapshots(directory, model, solver->dofs(), section.snapshots, solver->n_steps());
+  SnapshotWriter snapshots(directory, partition ? partition->local_mesh() : model.mesh, solver->dofs(),
+                           section.snapshots, solver->n_steps(), partition);
   transient::TransientCallbacks callbacks;
   callbacks.on_step = [&](const transient::StepView& view) {
     snapshots.on_step(view);
     return spectrum ? spectrum->add(view) : false;
   };
   if (spectrum) callbacks.progress_note = [&](double elapsed) { return spectrum->progress_note(elapsed); };
-  for (const std::string& warning : setup.warnings) std::cerr << "crackle: warning: " << warning << "\n";
+  if (is_writer_rank()) {
+    for (const std::string& warning : setup.warnings) std::cerr << "crackle: warning: " << warning << "\n";
+  }
   const transient::TransientSolver& finished = *solver;
   callbacks.on_finish = [&](const transient::TransientSummary& summary) {
     nlohmann::json extra = setup.contact ? contact::contact_json(setup.contact->contact()) : nlohmann::json::object();
     extra["probes"] = setup.probes_json;
     extra["probe_interval"] = finished_interval;
+    if (setup.distributed) extra["partition"] = setup.distributed->partition_json;
     std::vector<std::string> warnings = setup.warnings;
     warnings.insert(warnings.end(), summary.warnings.begin(), summary.warnings.end());
     extra["warnings"] = warnings;
-    transient::write_transient_outputs(directory, finished, extra);
+    // Every rank holds the same records (summed each step): rank 0 writes them.
+    on_writer_rank([&] { transient::write_transient_outputs(directory, finished, extra); });
   };
   solver->run(callbacks);
   return solver;
@@ -1026,7 +1059,7 @@ std::optional<modal::ModalResult> run_modal_stage(const scene::Scene& scene, con
   modal_settings.cache_directory = modal_cache;
   modal::ModalResult modes = modal::run_modal(
       [&model](mesh::Variant variant) -> const fem::System& { return *model.system(variant); }, modal_settings);
-  modal::write_modal_outputs(output_directory, model.mesh, modes);
+  on_writer_rank([&] { modal::write_modal_outputs(output_directory, model.mesh, modes); });
   stage.ran = true;
   stage.seconds = clock.seconds();
   out << modal::modal_table(modes);
@@ -1081,17 +1114,19 @@ void run_stages(const scene::Scene& scene, const RunCommandOptions& options, std
     Stopwatch clock;
     spectrum_stage.ran = true;
     spectrum_stage.reason = "the scene has a spectrum: section";
-    spectrum->write(scene, directory, dt, out);
+    on_writer_rank([&] { spectrum->write(scene, directory, dt, out); });
     spectrum_stage.seconds = clock.seconds();
   } else if (scene.spectrum) {
     Stopwatch clock;
     spectrum_stage.ran = true;
     spectrum_stage.reason = "the scene has a spectrum: section; no harmonic excitation: ring-down analysis";
-    write_ringdown_spectrum(scene, directory, solver ? solver->probes() : reduced_probes, setup, modes, out);
+    on_writer_rank([&] {
+      write_ringdown_spectrum(scene, directory, solver ? solver->probes() : reduced_probes, setup, modes, out);
+    });
     spectrum_stage.seconds = clock.seconds();
   }
   stages.push_back(spectrum_stage);
-  write_run_json(scene, directory, stages, setup.frequency, total.seconds());
+  on_writer_rank([&] { write_run_json(scene, directory, stages, setup.frequency, total.seconds()); });
   out << "wrote " << (directory / "run.json").string() << "\n";
 }
 
@@ -1103,26 +1138,47 @@ void run_run_command(const RunCommandOptions& options, std::ostream& out) {
     throw InputError(scene.file + ": transient: expected a transient section for crackle run (crackle modal "
                      "computes modes alone), got none");
   }
+  const int ranks = run_ranks();
+  if (ranks > 1 && scene.transient->model == "reduced") {
+    throw InputError(scene.where("transient.model") + ": expected full under mpirun -np " + std::to_string(ranks) +
+                     " (one transient over several processes is the full explicit model), got reduced; run the "
+                     "reduced model without mpirun (it takes seconds on one process)");
+  }
   const fs::path& directory = options.output_directory;
   // Before anything is computed: the folder can be written and is ours (leftovers of an earlier run
-  // removed), and the mesh fits in memory.
+  // removed), and the mesh fits in memory. Under mpirun rank 0 owns the folder and prints.
   std::string modal_reason;
-  check_memory(scene, !needed_variants(scene, modal_reason).empty() ? matrices::eigen_solve
-                     : scene.transient->model == "reduced"       ? matrices::static_solve
-                     : !scene.gmsh_file.empty()                  ? matrices::stiffness
-                                                                 : matrices::none);
-  OutputFolder folder(directory, "run", options.scene_path, options.overwrite, std::cerr);
+  on_every_rank([&] {
+    check_memory(scene, !needed_variants(scene, modal_reason).empty() ? matrices::eigen_solve
+                        : scene.transient->model == "reduced"       ? matrices::static_solve
+                        : !scene.gmsh_file.empty()                  ? matrices::stiffness
+                                                                    : matrices::none);
+  });
+  std::optional<OutputFolder> folder;
+  on_writer_rank([&] { folder.emplace(directory, "run", options.scene_path, options.overwrite, std::cerr); });
+  NullStream silent;
+  std::exception_ptr error;
   try {
-    run_stages(scene, options, out);
+    run_stages(scene, options, is_writer_rank() ? out : silent);
   } catch (...) {
+    error = std::current_exception();
+  }
+  if (ranks > 1) {  // the same error (and exit code) on every rank
     try {
-      folder.finish("failed");
+      distributed::agree(error);
+    } catch (...) {
+      error = std::current_exception();
+    }
+  }
+  if (error) {
+    try {
+      if (folder) folder->finish("failed");
     } catch (const std::exception&) {
       // The run's own error says more than a failure to record it.
     }
-    throw;
+    std::rethrow_exception(error);
   }
-  folder.finish("done");
+  if (folder) folder->finish("done");
 }
 
 }  // namespace crackle::pipeline

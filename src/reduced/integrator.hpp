@@ -47,8 +47,13 @@ struct ReducedEnergy {
 
 /// Options of the per-step contact solve.
 struct ReducedIntegratorOptions {
-  int max_contact_iterations = 100;  ///< active-set / stick-slip iterations per step before SolverError
-  double slip_direction_tolerance = 1e-10;  ///< change of a slip direction (unit vector) that counts as converged
+  int max_contact_iterations = 100;  ///< active-set iterations (friction: Newton solves) per step before SolverError
+  /// Friction: converged when \f$|p - P(z(p))|_\infty \le\f$ force_tolerance \f$\max(|p|_\infty, |P|_\infty)\f$.
+  double force_tolerance = 1e-9;
+  double min_line_search_step = 1.0 / 1024.0;  ///< friction Newton: smallest damping factor tried
+  int newton_iterations = 8;     ///< friction: Newton solves before (and after each) Gauss-Seidel round
+  int gauss_seidel_sweeps = 20;  ///< friction: projected Gauss-Seidel sweeps per round
+  int max_gauss_seidel_rounds = 100;  ///< friction: rounds before SolverError
 };
 
 /// Time integrator of a ReducedSystem. Borrows the system: it must outlive the integrator.
@@ -57,19 +62,19 @@ struct ReducedIntegratorOptions {
 /// primal-dual active set on the normal rows, warm-started from the previous step; each iteration
 /// solves \f$(K_A^{-1} + W_{AA})\,p_A = -\tilde g_A\f$ (K_A = eps_N A) by a Cholesky factor cached for
 /// the active set (kept while the set does not change), then re-activates rows with g < 0 and
-/// releases rows with p <= 0. With friction: the same for the normal rows, plus per closed pair the
-/// stick rows \f$p_T/k_T + g_T = p_T^{old}/k_T + g_T^{old}\f$ (k_T = eps_T A, symmetric, so Cholesky
-/// again) or the slip rows \f$p_T = \mu p_N e\f$ with the slip direction e frozen (LU), iterated with
-/// the return mapping until the stick/slip states and directions are unchanged (a fixed point;
-/// exact in one pass for straight slip).
+/// releases rows with p <= 0. With friction: the condensed pair equations \f$F(p) = p - P(z(p)) = 0\f$,
+/// z the trial forces (normal \f$-\varepsilon_N A g_N\f$, tangential the elastic predictor of the step's
+/// tangential increment) and P the penalty (eq. 25d) with Coulomb's return mapping (eq. 15,
+/// contact::coulomb_return_mapping). A semi-smooth Newton with its generalized Jacobian (Cholesky on
+/// the stick-only block, cached; LU while a pair slips) and an Armijo line search, warm-started from
+/// the previous step; where it stalls at the kinks of P (states changing on many coupled pairs) it
+/// restarts as rounds of projected Gauss-Seidel sweeps over the pairs on \f$K^{-1} + W\f$ (robust,
+/// linear), each round followed by a Newton finish kept only if it converges.
 ///
 /// **Cost.** Setup: W in O(c^2 m). Per step: O(c m) for the free gaps, O(c |A|) for the gaps of the
 /// solution, O(|A|^2) per Cholesky solve, plus O(|A|^3/3) whenever the active set differs from the
-/// cached one (frictionless), or an O(|A|^3) LU per iteration while any pair slips (friction).
-/// Measured (m = 40, one core, breathing half the crack): c = 100 rows 44 us/step (1.14 iterations,
-/// 0.14 factorisations per step); c = 1000 rows 11.9 ms/step, dominated by 0.75 refactorisations per
-/// step of the ~530-row active block (a low-rank update of the cached factor is the next step);
-/// friction c = 99 rows 166 us/step, c = 300 rows 6.3 ms/step (3.2-3.6 iterations, all LU).
+/// cached one (frictionless), or an O((3|A|)^3) LU per Newton solve while any pair slips, and O(c^2)
+/// per Gauss-Seidel sweep (friction). Measured: docs/benchmarks.md section 8.
 class ReducedIntegrator {
  public:
   using LoadFunction = std::function<double(double)>;
@@ -121,11 +126,33 @@ class ReducedIntegrator {
   /// Contact iterations and Cholesky/LU factorisations summed over all steps.
   long total_iterations() const { return total_iterations_; }
   long total_factorizations() const { return total_factorizations_; }
+  /// Friction: rounds of projected Gauss-Seidel sweeps the Newton solve needed, summed over all steps.
+  long total_gauss_seidel_rounds() const { return total_gauss_seidel_rounds_; }
+  /// Rows of the factorised blocks summed over all factorisations (their mean size: divide by
+  /// total_factorizations()).
+  long total_factorized_rows() const { return total_factorized_rows_; }
+  /// Rows of the largest factorised block so far.
+  long largest_factorized_rows() const { return largest_factorized_rows_; }
   /// The step compliance W = B Phi S (B Phi)^T + R (c x c) [m/N].
   const MatrixX& step_compliance() const { return w_; }
 
  private:
   enum class PairState { kOpen, kStick, kSlip };
+
+  /// One pair's block of dP/dz (see friction_newton_direction): open, stick (identity), or slip along
+  /// `direction` (unit, in the tangent rows) with `radial_ratio` = mu z_N / |z_T|.
+  struct FrictionJacobian {
+    PairState state = PairState::kOpen;
+    Eigen::Vector2d direction = Eigen::Vector2d::Zero();
+    double radial_ratio = 0.0;
+  };
+
+  /// A friction iterate: forces p, their gaps, the projection P(z(p)), its Jacobian, |p - P|_inf.
+  struct FrictionIterate {
+    VectorX force, gap, projected;
+    std::vector<FrictionJacobian> jacobians;
+    double residual = 0.0;
+  };
 
   struct CachedFactor {
     std::vector<Index> rows;
@@ -137,6 +164,19 @@ class ReducedIntegrator {
   void solve_contact(const MatrixX& w, const VectorX& free_gap, bool tangential, CachedFactor* cache);
   void solve_normal(const MatrixX& w, const VectorX& free_gap, CachedFactor* cache);
   void solve_with_friction(const VectorX& free_gap);
+  /// Gaps g(p), the projection P(z(p)) of the trial forces (penalty and return mapping) and its
+  /// Jacobian blocks; returns |p - P|_inf [N].
+  double friction_map(const VectorX& p, const VectorX& free_gap, VectorX& gap, VectorX& projected,
+                      std::vector<FrictionJacobian>& jacobians) const;
+  void evaluate(const VectorX& free_gap, FrictionIterate& iterate) const;
+  bool friction_converged(const FrictionIterate& iterate) const;
+  /// At most `budget` damped Newton steps; true once converged. Counts the linear solves.
+  bool friction_newton(const VectorX& free_gap, int budget, FrictionIterate& iterate, int& solves);
+  /// `sweeps` projected Gauss-Seidel sweeps over the pairs, then re-evaluates the iterate.
+  void friction_gauss_seidel(const VectorX& free_gap, int sweeps, FrictionIterate& iterate);
+  /// The semi-smooth Newton direction for F = p - P at p (residual F).
+  VectorX friction_newton_direction(const VectorX& p, const VectorX& residual,
+                                    const std::vector<FrictionJacobian>& jacobians);
   double penalty_energy() const;
   double residual_strain(const VectorX& p, double a) const;
   void update_energy_scale();
@@ -150,6 +190,7 @@ class ReducedIntegrator {
   VectorX damping_;      ///< d_r = alpha + beta omega_r^2
   VectorX denominator_;  ///< 1 + d_r h/2 + omega_r^2 h^2/4
   VectorX normal_stiffness_, tangential_stiffness_;  ///< eps A per pair [N/m]
+  VectorX row_compliance_;  ///< friction: 1 / (eps A) per row (the Newton merit's scaling)
   MatrixX w_;
 
   double time_ = 0.0;
@@ -159,7 +200,6 @@ class ReducedIntegrator {
   VectorX p_, g_;  ///< current pair forces and gaps (also the friction history of the next step)
   VectorX p_old_, g_old_;
   std::vector<PairState> state_;
-  std::vector<Vec3> slip_direction_;  ///< (0, e1, e2) of slipping pairs
   CachedFactor step_factor_;
 
   ReducedEnergy energy_;
@@ -168,6 +208,9 @@ class ReducedIntegrator {
   int last_iterations_ = 0;
   long total_iterations_ = 0;
   long total_factorizations_ = 0;
+  long total_gauss_seidel_rounds_ = 0;
+  long total_factorized_rows_ = 0;
+  long largest_factorized_rows_ = 0;
 };
 
 /// Default steps per period of the highest frequency to resolve, from the receptance test: at 40

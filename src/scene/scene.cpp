@@ -47,6 +47,15 @@ Param sweep_end(const std::string& name, const std::string& doc) {
   }).or_scalar_for("hz").required();
 }
 
+/// An optional map of position lists along x, y and z [m], at most `most` per axis.
+Param axis_positions(const std::string& name, const std::string& doc, int most) {
+  return map_of(name, doc, {
+    number("x", "Positions along x.").with_unit("m").list(1, most),
+    number("y", "Positions along y.").with_unit("m").list(1, most),
+    number("z", "Positions along z.").with_unit("m").list(1, most),
+  }).optional_section();
+}
+
 Param build_parameters() {
   const auto& faces = mesh::box_face_names();
   // clang-format off
@@ -59,13 +68,9 @@ Param build_parameters() {
         integer("cells", "Elements per direction; grid lines are added where crack edges need them.")
             .at_least(1).list(3).required(),
         integer("order", "Element order p (Lagrange elements on GLL nodes).").at_least(1).at_most(4).required(),
-        map_of("lines", "Extra grid lines along each axis, added to the uniform ones (a study puts the "
-                        "crack edges of all its cases here so that they share one mesh); lines on or "
-                        "outside the boundary and repeated lines are ignored.", {
-          number("x", "Positions along x.").with_unit("m").list(1, 100000),
-          number("y", "Positions along y.").with_unit("m").list(1, 100000),
-          number("z", "Positions along z.").with_unit("m").list(1, 100000),
-        }).optional_section(),
+        axis_positions("lines", "Extra grid lines along each axis, added to the uniform ones (a study puts the "
+                                "crack edges of all its cases here so that they share one mesh); lines on or "
+                                "outside the boundary and repeated lines are ignored.", 100000),
         map_of("grading", "Grid lines graded geometrically towards the crack front (the crack-tip singularity "
                           "otherwise limits every order p to first-order convergence): on each side of the "
                           "front, lines at h ratio^k, k = 1..layers, h the distance to the next grid line. "
@@ -82,6 +87,9 @@ Param build_parameters() {
               .at_most(8).or_word("auto").defaults_to("auto"),
           number("ratio", "Ratio of successive layers; auto: 0.2.").above(0).below(1).or_word("auto")
               .defaults_to("auto"),
+          axis_positions("fronts", "Further positions to grade towards along each axis, besides the crack's "
+                                   "own front (a study puts the fronts of all its cases here, so that they "
+                                   "share one mesh); positions on or outside the boundary are ignored.", 10000),
         }).or_scalar_for("mode"),
       }),
       text("gmsh", "Gmsh MSH 4.1 file (ASCII or binary), relative to the scene file's folder: 8- or 27-node "
@@ -771,9 +779,14 @@ Scene scene_from(const Values& values) {
       if (values.has(key)) scene.box.extra_lines[axis] = values.numbers(key);
     }
     scene.grading.mode = values.word("mesh.box.grading.mode");
-    mesh::Grading grading{mesh::kAutoLayers, 0.2};
+    mesh::Grading grading;
+    grading.layers = mesh::kAutoLayers;
     if (!values.is_word("mesh.box.grading.layers")) grading.layers = values.integer("mesh.box.grading.layers");
     if (!values.is_word("mesh.box.grading.ratio")) grading.ratio = values.number("mesh.box.grading.ratio");
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::string key = "mesh.box.grading.fronts." + kAxes[axis];
+      if (values.has(key)) grading.fronts[axis] = values.numbers(key);
+    }
     scene.grading.grading = grading;
   }
 

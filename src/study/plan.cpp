@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <array>
 #include <set>
 
 #include "core/errors.hpp"
@@ -470,6 +471,40 @@ std::vector<std::vector<double>> shared_crack_lines(const std::vector<scene::Sce
   return lines;
 }
 
+std::string shared_grading(const std::vector<scene::Scene>& scenes) {
+  std::array<std::set<double>, 3> fronts;
+  std::set<std::array<std::vector<double>, 3>> per_case;
+  std::set<int> layers;
+  const scene::Scene* graded = nullptr;
+  for (const scene::Scene& s : scenes) {
+    if (!s.gmsh_file.empty() || !s.crack || s.grading.mode == "none") continue;
+    mesh::BoxSpec box = s.box;
+    box.grading = s.grading.grading;
+    std::array<std::vector<double>, 3> own = mesh::crack_fronts(box, *s.crack);
+    for (int axis = 0; axis < 3; ++axis) {
+      own[axis].insert(own[axis].end(), box.grading.fronts[axis].begin(), box.grading.fronts[axis].end());
+      std::sort(own[axis].begin(), own[axis].end());
+      fronts[axis].insert(own[axis].begin(), own[axis].end());
+    }
+    per_case.insert(own);
+    layers.insert(mesh::resolve_grading(box, *s.crack).layers);
+    graded = &s;
+  }
+  if (per_case.size() < 2) return "";
+  // The same mode, ratio and layers in every case (auto layers may differ with the crack: the most).
+  const mesh::Grading& grading = graded->grading.grading;
+  std::string text = "{mode: " + graded->grading.mode + ", layers: " + std::to_string(*layers.rbegin()) +
+                     ", ratio: " + format_number(grading.ratio) + ", fronts: {";
+  std::vector<std::string> axes;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (fronts[axis].empty()) continue;
+    std::vector<std::string> parts;
+    for (double value : fronts[axis]) parts.push_back(format_number(value));
+    axes.push_back(std::string(kAxes[axis]) + ": [" + join(parts) + "]");
+  }
+  return text + join(axes) + "}}";
+}
+
 StudyPlan plan_study(const std::string& text, const std::string& file) {
   StudyPlan plan;
   plan.file = file;
@@ -568,6 +603,13 @@ StudyPlan plan_study(const std::string& text, const std::string& file) {
     }
   }
 
+  // Graded meshes: every case grades towards the fronts of all cases (from the same grid), so
+  // that the cases still share one mesh.
+  if (const std::string grading = shared_grading(scenes); !grading.empty()) {
+    for (StudyCase& study_case : plan.cases) study_case.overrides.push_back({"mesh.box.grading", grading});
+    plan.shares_grid_lines = true;
+  }
+
   const std::string outputs = join(spec.outputs, ",");
   for (std::size_t c = 0; c < plan.cases.size(); ++c) {
     StudyCase& study_case = plan.cases[c];
@@ -599,7 +641,9 @@ StudyPlan plan_study(const std::string& text, const std::string& file) {
     study_case.modal_key = hash_text(emit(key_document, false));
 
     YAML::Node primer = copy_of(document);
-    primer.remove("transient");
+    primer.remove("transient");  // and what needs it: a modal solve is all the primer does
+    primer.remove("spectrum");
+    primer.remove("sweep");
     if (!primer["modal"].IsMap()) primer["modal"] = YAML::Node(YAML::NodeType::Map);
     primer["modal"]["variants"] = YAML::Load("[uncracked]");
     study_case.primer_text = "# uncracked modes shared by the cases with modal cache key " +

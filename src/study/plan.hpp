@@ -56,7 +56,9 @@ struct StudyPlan {
   StudySpec spec;
   std::string base_text;  ///< the scene text without the study section (line numbers kept)
   std::vector<StudyCase> cases;
-  bool shares_grid_lines = false;  ///< the study added the union of crack edges as mesh.box.lines
+  /// The study added the union of crack edges as mesh.box.lines (and of crack fronts as
+  /// mesh.box.grading.fronts): the cases share one mesh.
+  bool shares_grid_lines = false;
 };
 
 /// Parses and checks the `study:` section of a scene file. InputError (file:line: path: ...) on any
@@ -91,6 +93,11 @@ StudyPlan plan_study(const std::string& text, const std::string& file);
 /// Sorted, distinct grid-line coordinates per axis that make every case's crack edges grid lines
 /// of one shared mesh; empty per axis where the cases' cracks agree.
 std::vector<std::vector<double>> shared_crack_lines(const std::vector<scene::Scene>& scenes);
+
+/// When the cases grade their box meshes (mesh.box.grading not none) towards crack fronts that
+/// differ, the mesh.box.grading value (a YAML flow map) that grades every case towards the fronts of
+/// all cases, with the same mode, ratio and layers (the most any case resolves); empty otherwise.
+std::string shared_grading(const std::vector<scene::Scene>& scenes);
 
 /// 64-bit FNV-1a of the text, as 16 hex digits.
 std::string hash_text(const std::string& text);

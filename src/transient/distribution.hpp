@@ -5,6 +5,7 @@
 /// its ghosts (DOFs owned by another rank that its elements or crack pairs touch). Every rank
 /// integrates its owned and its ghost DOFs from the same completed forces, so ghosts stay equal to
 /// their owners without a second exchange; sums (energies, dot products) count owned DOFs only.
+#include <exception>
 #include <vector>
 
 #include "core/types.hpp"
@@ -27,6 +28,12 @@ class Distribution {
   virtual void complete(VectorX& local) const = 0;
   /// Sums `values` over the ranks, in place (every rank gets the same sums).
   virtual void sum(std::vector<double>& values) const = 0;
+  /// Collective: every rank passes its own error (null: none). When some rank failed, every rank
+  /// throws the error of the lowest failing rank (the same type and text), so that all stop
+  /// together with one message; else returns.
+  virtual void agree(std::exception_ptr error) const {
+    if (error) std::rethrow_exception(error);
+  }
 };
 
 }  // namespace crackle::transient

@@ -2,6 +2,7 @@
 /// \file Excitations of a transient run: time signals, loads on node or face sets (the second term
 /// of MODEL.md eq. 25b), and the initial fields of eq. (6).
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,15 @@ struct ExternalLoad {
   Vec3 direction = Vec3::UnitZ();    ///< normalised on use
   double amplitude = 0.0;            ///< total force [N]
   Signal signal;
+  /// When set: the load's nodal forces [N] at signal 1 over the run's DOFs, taken as they are
+  /// (nodes, faces, direction and amplitude unused). A distributed run gives each rank the share of
+  /// its owned DOFs of the load placed on the whole body (possibly none), so that the total force
+  /// is the one-process one.
+  struct NodalForces {
+    std::vector<Index> dofs;
+    std::vector<double> values;
+  };
+  std::optional<NodalForces> nodal_forces;
 };
 
 /// A field over the mesh nodes: value at node `node` (at `position`), e.g. an initial velocity.

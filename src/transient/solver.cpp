@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 
 #include "core/errors.hpp"
 #include "core/resources.hpp"
@@ -128,9 +129,13 @@ struct TransientSolver::Impl final : SecondOrderSystem {
   void choose_time_step();
   void set_initial_state();
   void probe_sample(Index i, const std::vector<double>& before, std::vector<double>& sample) const;
-  void record_probes(Index i, const std::vector<double>& sample, const std::vector<int>& states_before, double time);
+  void opening_states(const std::vector<int>& states_before, std::vector<double>& states) const;
+  void record_probes(Index i, const std::vector<double>& sample, const std::vector<double>& states, double time);
   void record_terms();
-  void sum_over_ranks(std::vector<double>& sample, StepSums& sums, bool with_sums);
+  void sum_over_ranks(std::vector<double>& sample, std::vector<double>& states, StepSums& sums, bool with_sums,
+                      std::exception_ptr failure);
+  /// The step callback; over ranks, its verdict (stop, failure) is agreed by all.
+  bool step_callback(const TransientCallbacks& callbacks, const StepView& view) const;
   void progress_line(Index i, double elapsed, const std::string& note) const;
   void integrate(const TransientCallbacks& callbacks);
 };
@@ -165,6 +170,17 @@ void TransientSolver::Impl::add_terms() {
     if (!std::isfinite(load.amplitude) || !(load.direction.norm() > 0.0)) {
       throw InputError(where + ": expected a finite amplitude and a nonzero direction, got amplitude " +
                        format_number(load.amplitude) + " N");
+    }
+    if (load.nodal_forces) {
+      fem::LoadShape shape;
+      shape.name = where;
+      shape.dofs = load.nodal_forces->dofs;
+      shape.values = load.nodal_forces->values;
+      for (Index dof : shape.dofs) {
+        if (dof < 0 || dof >= n_dofs()) throw InputError(where + ": a nodal force outside the run's DOFs");
+      }
+      terms.push_back(std::make_shared<ExternalForce>(std::move(shape), load.signal));
+      continue;
     }
     const fem::LoadPlacement placement{where, load.nodes, load.faces, load.amplitude * load.direction.normalized()};
     terms.push_back(std::make_shared<ExternalForce>(system->load_shape(placement), load.signal));
@@ -256,12 +272,16 @@ void TransientSolver::Impl::setup() {
   distribution = problem.distribution.get();
   if (distribution) {
     distribution->complete(moving_mass);  // shares of the elements of every rank
-    for (Index k = 0; k < n_dofs(); ++k) {
+    std::exception_ptr failure;
+    for (Index k = 0; k < n_dofs() && !failure; ++k) {
       if (!(moving_mass[k] > 0.0)) {
-        throw InputError("lumped mass " + format_number(moving_mass[k]) + " of local DOF " + std::to_string(k) +
-                         " is not positive (material density <= 0, or a node outside every element)");
+        failure = std::make_exception_ptr(InputError(
+            "lumped mass " + format_number(moving_mass[k]) + " of global DOF " +
+            std::to_string(distribution->global_dofs()[k]) +
+            " is not positive (material density <= 0, or a node outside every element)"));
       }
     }
+    distribution->agree(failure);
   }
   inverse = moving_mass.cwiseInverse();
   for (Index k = 0; k < n_dofs(); ++k) {
@@ -346,11 +366,15 @@ void TransientSolver::Impl::record_terms() {
   }
 }
 
-void TransientSolver::Impl::sum_over_ranks(std::vector<double>& sample, StepSums& sums, bool with_sums) {
-  // One reduction per step: the probe rows (zeros from the ranks that do not own a probe), the
-  // terms' dot products and energies, and the step sums when the step computed them.
+void TransientSolver::Impl::sum_over_ranks(std::vector<double>& sample, std::vector<double>& states, StepSums& sums,
+                                          bool with_sums, std::exception_ptr failure) {
+  // One reduction per step: the probe rows and the opening probes' states (zeros from the ranks
+  // that do not own a probe), the terms' dot products and energies, the step sums when the step
+  // computed them, and the number of ranks whose step failed (then all stop with one error).
   std::vector<double>& values = rank_sums;  // kept between steps: no allocation in the step loop
   values.assign(sample.begin(), sample.end());
+  values.insert(values.end(), states.begin(), states.end());
+  values.push_back(failure ? 1.0 : 0.0);
   for (const TermRecord& r : records) {
     values.insert(values.end(), {r.dot_displacement, r.dot_velocity, r.dot_velocity_new, r.stored, r.dissipated, r.active});
   }
@@ -361,6 +385,8 @@ void TransientSolver::Impl::sum_over_ranks(std::vector<double>& sample, StepSums
   distribution->sum(values);
   std::size_t next = sample.size();
   std::copy(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(next), sample.begin());
+  for (double& state : states) state = values[next++];
+  if (values[next++] > 0.0) distribution->agree(failure);
   for (TermRecord& r : records) {
     for (double* field : {&r.dot_displacement, &r.dot_velocity, &r.dot_velocity_new, &r.stored, &r.dissipated, &r.active}) {
       *field = values[next++];
@@ -374,21 +400,41 @@ void TransientSolver::Impl::sum_over_ranks(std::vector<double>& sample, StepSums
   }
 }
 
-void TransientSolver::Impl::record_probes(Index i, const std::vector<double>& sample,
-                                          const std::vector<int>& states_before, double time) {
+void TransientSolver::Impl::opening_states(const std::vector<int>& states_before, std::vector<double>& states) const {
+  // A rank that does not own an opening probe's pair adds 0 (its callers give it a state of 0).
+  for (std::size_t p = 0; p < problem.probes.size(); ++p) {
+    const Probe& probe = problem.probes[p];
+    states[p] = !probe.opening() || !probe.state ? 0.0 : probe.state_at_step_end ? states_before[p] : probe.state();
+  }
+}
+
+void TransientSolver::Impl::record_probes(Index i, const std::vector<double>& sample, const std::vector<double>& states,
+                                          double time) {
   if (i % options.probe_interval != 0) return;
   probe_history.time.push_back(time);
   for (std::size_t c = 0; c < sample.size(); ++c) probe_history.values[c].push_back(sample[c]);
-  // The opening probes' contact states (the owner rank's: the distributed run does not record
-  // opening probes yet, its callers place probes on nodes).
+  // The opening probes' contact states (without a contact term: from the sign of the gap).
   for (std::size_t p = 0; p < problem.probes.size(); ++p) {
     const Probe& probe = problem.probes[p];
     if (!probe.opening()) continue;
-    const int state = !probe.state                 ? (sample[9 * p] < 0.0 ? 2 : 0)
-                      : probe.state_at_step_end ? states_before[p]
-                                                : probe.state();
-    probe_history.states[p].push_back(state);
+    probe_history.states[p].push_back(probe.state ? static_cast<int>(states[p]) : (sample[9 * p] < 0.0 ? 2 : 0));
   }
+}
+
+bool TransientSolver::Impl::step_callback(const TransientCallbacks& callbacks, const StepView& view) const {
+  if (!distribution) return callbacks.on_step(view);
+  // Every rank stops when one asks to, and all fail together when one's callback fails.
+  bool stop = false;
+  std::exception_ptr failure;
+  try {
+    stop = callbacks.on_step(view);
+  } catch (...) {
+    failure = std::current_exception();
+  }
+  std::vector<double> verdict{stop ? 1.0 : 0.0, failure ? 1.0 : 0.0};
+  distribution->sum(verdict);
+  if (verdict[1] > 0.0) distribution->agree(failure);
+  return verdict[0] > 0.0;
 }
 
 void TransientSolver::Impl::progress_line(Index i, double elapsed, const std::string& note) const {
@@ -501,6 +547,7 @@ void TransientSolver::Impl::integrate(const TransientCallbacks& callbacks) {
   StepSums sums;
   std::vector<double> sample(9 * n_probes), before(6 * n_probes);
   std::vector<int> states_before(n_probes, 0);  // the opening probes' states at U(i) (implicit contact)
+  std::vector<double> states(n_probes, 0.0);      // the states recorded for step i
   const Index owned = n_owned();
   std::vector<double> kinetic_initial{
       0.5 * velocity.head(owned).cwiseProduct(moving_mass.head(owned)).dot(velocity.head(owned))};
@@ -524,11 +571,18 @@ void TransientSolver::Impl::integrate(const TransientCallbacks& callbacks) {
       if (probe.state && probe.state_at_step_end) states_before[p] = i == 0 ? (u[0] < 0.0 ? 2 : 0) : probe.state();
     }
     const bool with_sums = sample_energy || o.damping.alpha > 0.0;
-    integrator.step(*this, time, i == 0 ? 0.0 : dt, dt, displacement, velocity, with_sums ? &sums : nullptr);
-    record_terms();
+    std::exception_ptr failure;  // a distributed run: this rank's step failed, the others are told
+    try {
+      integrator.step(*this, time, i == 0 ? 0.0 : dt, dt, displacement, velocity, with_sums ? &sums : nullptr);
+      record_terms();
+      opening_states(states_before, states);
+    } catch (...) {
+      if (!distribution) throw;
+      failure = std::current_exception();
+    }
     probe_sample(i, before, sample);
-    if (distribution) sum_over_ranks(sample, sums, with_sums);
-    record_probes(i, sample, states_before, time);
+    if (distribution) sum_over_ranks(sample, states, sums, with_sums, failure);
+    record_probes(i, sample, states, time);
     balance.add_step_work(i, dt, sums, o.damping.alpha);
     for (const TermRecord& record : records) active_sum += record.active;
 
@@ -557,7 +611,7 @@ void TransientSolver::Impl::integrate(const TransientCallbacks& callbacks) {
 
     if (callbacks.on_step) {
       const StepView view{i, time, dt, sample, displacement, velocity};
-      if (callbacks.on_step(view)) {
+      if (step_callback(callbacks, view)) {
         summary.status = "stopped";
         summary.message = "stopped by a callback at step " + std::to_string(i) + " (t = " + format_number(time) + " s)";
         break;

@@ -122,25 +122,4 @@ TEST(CliEdges, PetscOptionsPassAfterTheSeparatorOrWithPetsc) {
   fs::remove(scene);
 }
 
-TEST(CliEdges, RunRefusesSeveralMpiRanksWithOneMessage) {
-  // The launcher's environment as mpirun -np 2 sets it, without starting MPI: rank 0 says why,
-  // rank 1 exits quietly with the same code, and nothing is written.
-  const std::string out = (fs::temp_directory_path() / ("crackle-cli-edges-mpi-" + std::to_string(::getpid()))).string();
-  const std::string run = "run " + data("beam.yaml") + " -o " + out;
-  for (const std::string launcher : {"OMPI_COMM_WORLD_SIZE=2 OMPI_COMM_WORLD_RANK=", "PMI_SIZE=2 PMI_RANK="}) {
-    const Result rank0 = crackle(run, launcher + "0");
-    EXPECT_EQ(rank0.exit_code, 2);
-    EXPECT_EQ(rank0.output,
-              "crackle: error: crackle run is a single-process job, got 2 MPI processes (each would run the whole "
-              "job into the same folder); run it without mpirun (crackle modal runs under mpirun; crackle study "
-              "spreads cases over the ranks)\n");
-    const Result rank1 = crackle(run, launcher + "1");
-    EXPECT_EQ(rank1.exit_code, 2);
-    EXPECT_EQ(rank1.output, "");
-  }
-  EXPECT_FALSE(fs::exists(out));
-  // One rank is one process: the scene is read as usual.
-  EXPECT_EQ(crackle("check " + data("beam.yaml"), "OMPI_COMM_WORLD_SIZE=1 OMPI_COMM_WORLD_RANK=0").exit_code, 0);
-}
-
 }  // namespace

@@ -273,6 +273,66 @@ TEST(DistributedTransient, TetrahedraMatchOneProcess) {
   expect_same(run_tetrahedra(mesh, &parts), reference, "10-node tetrahedra, PT-Scotch");
 }
 
+/// A pointwise term (after the halo, as the crack contact) that fails on one rank at one step.
+class FailingTerm final : public fem::ForceTerm {
+ public:
+  FailingTerm(int rank, Index step) : rank_(rank), step_(step) {}
+  std::string name() const override { return "failing"; }
+  fem::EnergyRole role() const override { return fem::EnergyRole::external; }
+  bool needs_other_forces() const override { return true; }
+  void add_force(const fem::StepInput&, VectorX&) override {  // once per step
+    if (calls_++ == step_ && world_rank() == rank_) throw SolverError("contact: no solution on rank " + std::to_string(rank_));
+  }
+  double force_dot(const VectorX&) const override { return 0.0; }
+
+ private:
+  int rank_;
+  Index step_;
+  Index calls_ = 0;
+};
+
+TEST(DistributedTransient, AFailureOnOneRankStopsEveryRankWithItsError) {
+  // The last rank's step 7 throws: every rank leaves run() with that SolverError (no hang), and
+  // ranks other than the failing one name it.
+  const mesh::Mesh mesh = cracked_cantilever({24, 2, 4});
+  const std::vector<int> parts = partition_elements(mesh, world_size());
+  MeshPartition partition(mesh, parts);
+  transient::TransientProblem problem;
+  problem.materials = {fem::isotropic(2e11, 0.3, 7800.0)};
+  problem.dirichlet = partition.local_dirichlet({{mesh.node_sets.at("x-"), {0, 1, 2}, {0.0, 0.0, 0.0}, "clamp"}});
+  problem.initial.velocity = partition.local_field(VectorX::Ones(3 * mesh.n_nodes()));
+  problem.terms.push_back(std::make_shared<FailingTerm>(world_size() - 1, 7));
+  problem.distribution = std::shared_ptr<const transient::Distribution>(&partition, [](const auto*) {});
+  transient::TransientOptions options;
+  options.progress = false;
+  options.end_time = 1e-3;
+  transient::TransientSolver solver(partition.local_mesh(), problem, options);
+  try {
+    solver.run();
+    FAIL() << "expected SolverError";
+  } catch (const SolverError& error) {
+    const std::string expected = (world_rank() == world_size() - 1 || world_size() == 1 ? "" : "rank 1: ") +
+                                 std::string("contact: no solution on rank ") + std::to_string(world_size() - 1);
+    EXPECT_EQ(std::string(error.what()), expected);
+  }
+  EXPECT_EQ(solver.summary().status, "unstable");
+  EXPECT_EQ(solver.summary().steps, 7);  // steps 0..6 completed on every rank
+}
+
+TEST(DistributedTransient, AgreeThrowsTheLowestFailingRanksErrorEverywhere) {
+  if (world_size() < 2) GTEST_SKIP() << "needs 2 ranks";
+  agree(nullptr);  // nobody failed: returns
+  std::exception_ptr mine;
+  if (world_rank() == 1) mine = std::make_exception_ptr(IoError("cannot write snapshot_0001_1.vtu"));
+  try {
+    agree(mine);
+    FAIL() << "expected IoError";
+  } catch (const IoError& error) {
+    EXPECT_EQ(std::string(error.what()), world_rank() == 1 ? "cannot write snapshot_0001_1.vtu"
+                                                            : "rank 1: cannot write snapshot_0001_1.vtu");
+  }
+}
+
 TEST(DistributedTransient, MoreRanksThanElementsIsRefusedOnEveryRank) {
   if (world_size() < 2) GTEST_SKIP() << "needs 2 ranks";
   mesh::BoxSpec box;

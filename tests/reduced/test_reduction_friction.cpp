@@ -7,8 +7,11 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "contact/contact.hpp"
+#include "contact/penalty.hpp"
+#include "core/errors.hpp"
 #include "fem/material.hpp"
 #include "fem/system.hpp"
 #include "mesh/box.hpp"
@@ -114,17 +117,10 @@ TEST(ReductionFriction, FreeBlockKeepsItsRigidModesThePreloadAndItsVelocity) {
   EXPECT_NEAR(block.block_row.dot(integrator.modal_velocity()) / block.v0, 1.0, 1e-12);
 }
 
-// The cross-test proper: NOT PASSING YET. The stick/slip fixed point of ReducedIntegrator (states and
-// frozen slip directions iterated to a fixed point) cycles on this mesh (25 coupled pairs, 75 rows)
-// within the first microsecond of sliding, for any step tried (stop/100 .. stop/1600) and on 2 x 2
-// cells too: "stick/slip states did not settle in 100 iterations at step 4". Traced: every pair slips
-// and the frozen slip directions jump about the tangent plane from one iteration to the next (the
-// Picard iteration on the directions is unstable: the frozen-direction solve's transverse slip
-// increments, times eps_T, set the next trial direction; relaxing the update does not help). The full
-// model solves each pair in closed form and passes (tests/transient/test_friction.cpp). Enable it when
-// the reduced friction solve is made robust (a semi-smooth Newton on the condensed rows, with the
-// directions as unknowns).
-TEST(ReductionFriction, DISABLED_SlidingBlockDeceleratesAtMuNOverMAsInTheFullModel) {
+// The cross-test proper: every pair slips together through the dense flexibility (25 coupled pairs,
+// 75 rows), then the block stops and the pairs stick and slip back and forth about it (the case where
+// a stick/slip fixed point on frozen slip directions cycles).
+TEST(ReductionFriction, SlidingBlockDeceleratesAtMuNOverMAsInTheFullModel) {
   const ReducedBlock block = reduced_block();
   const double stop = block.v0 / block.deceleration;
   ReducedIntegrator integrator(block.system, stop / 400.0, [](double) { return 0.0; });
@@ -132,8 +128,10 @@ TEST(ReductionFriction, DISABLED_SlidingBlockDeceleratesAtMuNOverMAsInTheFullMod
   std::vector<double> times, speeds;
   double late_mean = 0.0;
   int late_count = 0;
+  int largest_iterations = 0;
   while (integrator.time() < 2.0 * stop) {
     integrator.step();
+    largest_iterations = std::max(largest_iterations, integrator.last_iterations());
     const double t = integrator.time(), v = block.block_row.dot(integrator.modal_velocity());
     if (t > 0.1 * stop && t < 0.7 * stop) {
       times.push_back(t);
@@ -152,11 +150,136 @@ TEST(ReductionFriction, DISABLED_SlidingBlockDeceleratesAtMuNOverMAsInTheFullMod
   double num = 0.0, den = 0.0;
   for (std::size_t k = 0; k < times.size(); ++k) num += (times[k] - mt) * (speeds[k] - mv), den += (times[k] - mt) * (times[k] - mt);
   const double measured = -num / den;
-  std::printf("reduced block: deceleration %.2f m/s^2 (mu N / m = %.2f), after the stop mean velocity %.2e m/s\n",
-              measured, block.deceleration, late_mean);
+  std::printf("reduced block: deceleration %.2f m/s^2 (mu N / m = %.2f), after the stop mean velocity %.2e m/s; "
+              "%lld steps, %.2f Newton iterations per step (largest %d), %.3f factorisations and %.3f Gauss-Seidel rounds "
+              "per step, energy error %.2e\n",
+              measured, block.deceleration, late_mean, static_cast<long long>(integrator.n_steps_taken()),
+              double(integrator.total_iterations()) / integrator.n_steps_taken(), largest_iterations,
+              double(integrator.total_factorizations()) / integrator.n_steps_taken(),
+              double(integrator.total_gauss_seidel_rounds()) / integrator.n_steps_taken(), integrator.energy_error());
   // The full test's tolerances (2 % on the deceleration, 2 % of v0 after the stop).
   EXPECT_NEAR(measured / block.deceleration, 1.0, 0.02);
   EXPECT_LT(std::abs(late_mean), 0.02 * block.v0);
+}
+
+// Many coupled pairs, slipping and sticking in turn: a steel plate clamped on x- with a mid-plane
+// delamination over its free half (bench_reduced's body, 8 x 8 x 2 cells: 36 pairs, 108 rows) under a
+// harmonic z force on the free end's top edge. Bending slides the two sublaminates over each other
+// (the closed half-period) and opens them (the other). At every step every pair must satisfy the
+// contact law to the solver's tolerance: the penalty p_N = eps_N A max(0, -g_N) and Coulomb's return
+// mapping (eq. 15) of the step's tangential increment, recomputed here by contact::coulomb_return_mapping
+// (relative to the largest pair force; the solver stops at 1e-9).
+TEST(ReductionFriction, ManyCoupledPairsSatisfyThePenaltyAndCoulombAtEveryPairAndStep) {
+  mesh::BoxSpec box;
+  box.size = Vec3(0.2, 0.2, 0.01);
+  box.cells = {8, 8, 2};
+  mesh::CrackSpec crack;
+  crack.normal = kZ;
+  crack.at = 0.005;
+  crack.region = {{{0.1, 0.2}, {0.0, 0.2}, {0.0, 0.0}}};
+  const mesh::Mesh mesh = mesh::build_box_mesh(box, crack);
+  const fem::Materials materials = {fem::isotropic(210e9, 0.3, 7850.0)};
+  const std::vector<fem::DirichletCondition> clamp = {{mesh.node_sets.at("x-"), {0, 1, 2}, {0.0, 0.0, 0.0}, "x-"}};
+  const fem::System system(mesh, materials, clamp, mesh::Variant::open);
+  std::vector<Index> tip_top;
+  for (Index node = 0; node < mesh.n_nodes(); ++node)
+    if (mesh.nodes[node].x() > 0.2 - 1e-9 && mesh.nodes[node].z() > 0.01 - 1e-9) tip_top.push_back(node);
+  const fem::LoadShape load = system.load_shape({"push", tip_top, {}, Vec3(0.0, 0.0, 1.0)});
+  ReductionOptions options;
+  options.modes = 20;
+  options.friction = true;
+  const Reduction reduction = compute_reduction(system, options, {}, load);
+  contact::ContactOptions contact;
+  contact.friction_coefficient = kFriction;
+  const contact::PenaltyChoice penalty = contact::choose_penalty(mesh, materials, contact);
+  ReducedSystem reduced = reduced_system(reduction, 20, 1e3);
+  reduced.normal_penalty = penalty.normal_penalty;
+  reduced.tangential_penalty = penalty.tangential_penalty;
+  reduced.friction_coefficient = kFriction;
+  const Index n = reduced.n_pairs();
+  ASSERT_EQ(n, 36);
+
+  const int steps_per_period = 200;
+  const double h = reduced_time_step(reduced, 0.0), frequency = 1.0 / (steps_per_period * h);
+  const auto force = [frequency](double t) { return std::sin(2.0 * 3.14159265358979 * frequency * t); };
+  // The same run frictionless: its energy error is the impacts' (the massless boundary closing within a
+  // step, O(h^2)); friction must add none (its dissipation is exact per step).
+  ReducedSystem frictionless = reduced;
+  frictionless.friction_coefficient = 0.0;
+  ReducedIntegrator reference(frictionless, h, force);
+  reference.advance(2 * steps_per_period);
+  ReducedIntegrator integrator(reduced, h, force);
+  VectorX p_old = integrator.pair_forces(), g_old = integrator.gaps();
+  double worst_normal = 0.0, worst_tangential = 0.0, worst_cone = 0.0;
+  long slip_steps = 0, stick_steps = 0, iterations = 0;
+  int largest = 0;
+  for (int k = 0; k < 2 * steps_per_period; ++k) {
+    integrator.step();
+    const VectorX& p = integrator.pair_forces();
+    const VectorX& g = integrator.gaps();
+    const double scale = std::max(p.lpNorm<Eigen::Infinity>(), 1e-300);
+    for (Index i = 0; i < n; ++i) {
+      const Index r = 3 * i;
+      const double area = reduced.pair_area[i];
+      const double normal = reduced.normal_penalty * area * std::max(0.0, -g[r]);
+      worst_normal = std::max(worst_normal, std::abs(p[r] - normal) / scale);
+      const contact::CoulombUpdate update = contact::coulomb_return_mapping(
+          Vec3(0.0, p_old[r + 1], p_old[r + 2]) / area, Vec3(0.0, g[r + 1] - g_old[r + 1], g[r + 2] - g_old[r + 2]),
+          Vec3::UnitX(), reduced.tangential_penalty, kFriction, normal / area);
+      worst_tangential = std::max(
+          worst_tangential, (Vec3(0.0, p[r + 1], p[r + 2]) - area * update.traction).norm() / scale);
+      worst_cone = std::max(worst_cone, (std::hypot(p[r + 1], p[r + 2]) - kFriction * p[r]) / scale);
+    }
+    if (integrator.n_slipping() > 0) ++slip_steps;
+    if (integrator.n_closed() > integrator.n_slipping()) ++stick_steps;
+    iterations += integrator.last_iterations();
+    largest = std::max(largest, integrator.last_iterations());
+    p_old = p;
+    g_old = g;
+  }
+  std::printf("plate: %lld pairs, %lld steps with slip, %lld with stick, %.2f iterations per step (largest %d), "
+              "%ld Gauss-Seidel rounds, %.2f factorisations per step; worst relative |p_N - eps A max(0,-g)| %.1e, "
+              "|p_T - return mapping| %.1e, |p_T| - mu p_N %.1e; energy error %.2e (frictionless %.2e), friction dissipation "
+              "%.2e J\n",
+              static_cast<long long>(n), slip_steps, stick_steps, double(iterations) / (2 * steps_per_period), largest,
+              integrator.total_gauss_seidel_rounds(), double(integrator.total_factorizations()) / (2 * steps_per_period),
+              worst_normal, worst_tangential, worst_cone, integrator.energy_error(), reference.energy_error(),
+              integrator.energy().friction_dissipation);
+  EXPECT_GT(slip_steps, 20);
+  EXPECT_GT(stick_steps, 20);
+  EXPECT_LT(worst_normal, 1e-8);
+  EXPECT_LT(worst_tangential, 1e-8);
+  EXPECT_LT(worst_cone, 1e-9);  // the solver's force tolerance
+  EXPECT_GT(integrator.energy().friction_dissipation, 0.0);
+  EXPECT_LT(integrator.energy_error(), reference.energy_error() + 1e-3);
+}
+
+// A friction solve cut short (one Newton solve, no Gauss-Seidel round) fails with a SolverError that
+// names the step, the Newton solves and the residual; with the default budget the same step converges.
+TEST(ReductionFriction, AnUnconvergedFrictionSolveNamesTheStep) {
+  const ReducedBlock block = reduced_block();
+  const double h = block.v0 / block.deceleration / 400.0;
+  ReducedIntegratorOptions options;
+  options.newton_iterations = 1;
+  options.max_gauss_seidel_rounds = 0;
+  ReducedIntegrator cut(block.system, h, nullptr, options);
+  cut.set_initial_state(block.q0, block.v0_modal);
+  ReducedIntegrator full(block.system, h, nullptr);
+  full.set_initial_state(block.q0, block.v0_modal);
+  bool thrown = false;
+  for (int k = 0; k < 20 && !thrown; ++k) {
+    full.step();
+    try {
+      cut.step();
+    } catch (const SolverError& error) {
+      thrown = true;
+      const std::string message = error.what();
+      EXPECT_NE(message.find("friction solve did not converge in 1 Newton solves"), std::string::npos) << message;
+      EXPECT_NE(message.find("at step " + std::to_string(k + 1)), std::string::npos) << message;
+    }
+  }
+  EXPECT_TRUE(thrown);
+  EXPECT_GT(full.n_closed(), 0);
 }
 
 }  // namespace

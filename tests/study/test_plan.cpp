@@ -325,6 +325,16 @@ TEST(StudyPlan, ModalCacheKeyIgnoresWhatTheUncrackedModesDoNotDependOn) {
   // The primer solves the uncracked modes only.
   const scene::Scene primer = scene::parse_scene(gaps.cases[0].primer_text, "primer.yaml");
   EXPECT_EQ(primer.modal.variants, std::vector<std::string>{"uncracked"});
+  // A scene with a run and its spectrum still has a primer (the spectrum needs the transient).
+  const std::string run_scene = base_scene() +
+                                "transient:\n  excitation: {face: x+, direction: z, amplitude: 1.0, frequency: 100}\n"
+                                "  periods: 2\n  probes:\n    - {name: tip, point: [0.2, 0.01, 0.01]}\n"
+                                "spectrum: {harmonics: 3}\n";
+  const StudyPlan runs = plan_study(run_scene + "study:\n  vary:\n    crack.gap: [0, 1e-6]\n  outputs: [spectrum]\n",
+                                    "b.yaml");
+  ASSERT_FALSE(runs.cases[0].primer_text.empty());
+  EXPECT_EQ(scene::parse_scene(runs.cases[0].primer_text, "primer.yaml").modal.variants,
+            std::vector<std::string>{"uncracked"});
 }
 
 TEST(StudyPlan, YamlValuesAsJson) {
