@@ -10,6 +10,8 @@
 #include <optional>
 
 #include <Eigen/Core>
+#include <Eigen/LU>
+#include <Eigen/SVD>
 
 #include "core/errors.hpp"
 #include "core/resources.hpp"
@@ -257,6 +259,22 @@ class BranchRecorder {
   double first_flagged_hz_ = 0.0;
 };
 
+/// Index of the unknowns on the odd harmonics of Omega/2 in the gap layout of a nu = 2 solver (`rows` c).
+std::vector<Index> odd_unknowns(Index rows, int harmonics) {
+  std::vector<Index> odd;
+  for (int k = 1; k <= harmonics; k += 2)
+    for (int component : {2 * k - 1, 2 * k})
+      for (Index i = 0; i < rows; ++i) odd.push_back(component * rows + i);
+  return odd;
+}
+
+/// The gaps on the odd harmonics of Omega/2 of a nu = 2 solution.
+VectorX odd_part(const sweep::Solution& solution, const std::vector<Index>& odd) {
+  VectorX part(odd.size());
+  for (std::size_t i = 0; i < odd.size(); ++i) part[i] = solution.gaps[odd[i]];
+  return part;
+}
+
 /// Share of the odd harmonics of Omega/2 in the gap response of a nu = 2 solution (0: period one).
 double period_two_share(const sweep::Solution& solution, Index rows) {
   const Index components = solution.gaps.size() / rows;
@@ -294,30 +312,74 @@ sweep::ContinuationOptions continuation_options(const SweepSettings& settings) {
   return continuation;
 }
 
-/// The nu = 2 solution near the most unstable period-one point of the first period-doubling region
-/// of `branch` (points `first` ..), from the critical Floquet mode at a few amplitudes; none if no
-/// guess converges to a solution with a period-two share.
+/// The odd-harmonic block of the nu = 2 Jacobian at a period-one state `gaps` (in nu = 2 harmonics).
+/// At a period-one orbit the contact stiffness has period T, so the odd and the even harmonics of
+/// Omega/2 decouple: the block is singular where the nu = 2 branch crosses the period-one one.
+MatrixX odd_block(const sweep::HarmonicBalance& two, double omega, const VectorX& gaps, const std::vector<Index>& odd) {
+  const MatrixX jacobian = two.jacobian(omega, gaps);
+  MatrixX block(odd.size(), odd.size());
+  for (std::size_t i = 0; i < odd.size(); ++i)
+    for (std::size_t j = 0; j < odd.size(); ++j) block(i, j) = jacobian(odd[i], odd[j]);
+  return block;
+}
+
+/// Sign of a determinant (+1, -1; 0 when singular).
+int determinant_sign(const MatrixX& matrix) {
+  const Eigen::PartialPivLU<MatrixX> lu(matrix);
+  double sign = lu.permutationP().determinant();
+  for (Index i = 0; i < matrix.rows(); ++i) sign *= lu.matrixLU()(i, i) > 0.0 ? 1.0 : (lu.matrixLU()(i, i) < 0.0 ? -1.0 : 0.0);
+  return static_cast<int>(sign);
+}
+
+/// The first nu = 2 solution of the branch born at the first period doubling of `branch` (nu = 1).
+/// The doubling of the truncated harmonic balance is where the odd block of the nu = 2 Jacobian turns
+/// singular along the period-one branch (its determinant changes sign; the monodromy's doubling of the
+/// sampled orbit converges to it with H): found between branch points, refined by bisection in Omega.
+/// From there Keller's corrector along the block's null vector (sweep::branch_off) at a few steps;
+/// none if no sign change or no step converges to a solution with a period-two share.
 std::optional<sweep::Solution> period_two_start(const reduced::ReducedSystem& system, const sweep::HarmonicBalance& one,
                                                 const sweep::HarmonicBalance& two,
-                                                const std::vector<sweep::BranchPoint>& branch) {
-  std::size_t best = branch.size();
-  for (std::size_t i = 0; i < branch.size(); ++i) {
-    if (branch[i].stability.unstable_negative == 0) {
-      if (best < branch.size()) break;  // the end of the first region
-      continue;
-    }
-    if (best == branch.size() || branch[i].stability.max_real_part > branch[best].stability.max_real_part) best = i;
+                                                const std::vector<sweep::BranchPoint>& branch,
+                                                const sweep::ContinuationOptions& continuation) {
+  const Index rows = system.n_rows();
+  const std::vector<Index> odd = odd_unknowns(rows, two.n_harmonics());
+  const auto embedded = [&](const sweep::Solution& period_one) {
+    return sweep::period_doubled_guess(system, period_one, sweep::Stability(), two.n_harmonics(), 0.0);
+  };
+  const auto sign_at = [&](const sweep::Solution& period_one) {
+    return determinant_sign(odd_block(two, period_one.omega, embedded(period_one), odd));
+  };
+  std::size_t after = 0;
+  int previous = branch.empty() ? 0 : sign_at(branch.front().solution);
+  for (std::size_t i = 1; i < branch.size() && after == 0; ++i) {
+    const int sign = sign_at(branch[i].solution);
+    if (sign != previous) after = i;
+    previous = sign;
   }
-  if (best == branch.size()) return std::nullopt;
-  const sweep::Solution& period_one = branch[best].solution;
-  const sweep::Stability stability = one.floquet_stability(period_one);
-  const double size = period_one.gaps.cwiseAbs().maxCoeff();
-  for (double amplitude : {1.0, 0.5, 2.0, 0.25, 4.0}) {
-    const VectorX guess =
-        sweep::period_doubled_guess(system, period_one, stability, two.n_harmonics(), amplitude * size);
+  if (after == 0) return std::nullopt;
+  // bisection in Omega between the two period-one points around the sign change
+  sweep::Solution low = branch[after - 1].solution, high = branch[after].solution;
+  const int low_sign = sign_at(low);
+  for (int step = 0; step < 12; ++step) {
     try {
-      sweep::Solution solution = two.solve(period_one.omega, guess);
-      if (period_two_share(solution, system.n_rows()) > 10.0 * kJoinedShare) return solution;
+      sweep::Solution middle = one.solve(0.5 * (low.omega + high.omega), 0.5 * (low.gaps + high.gaps));
+      (sign_at(middle) == low_sign ? low : high) = std::move(middle);
+    } catch (const SolverError&) {
+      break;  // a fold in between: the bracket so far
+    }
+  }
+  sweep::Solution base;
+  base.omega = high.omega;
+  base.gaps = embedded(high);
+  const Eigen::JacobiSVD<MatrixX> svd(odd_block(two, base.omega, base.gaps, odd), Eigen::ComputeFullV);
+  const VectorX null = svd.matrixV().col(svd.matrixV().cols() - 1);
+  VectorX direction = VectorX::Zero(base.gaps.size());
+  for (std::size_t i = 0; i < odd.size(); ++i) direction[odd[i]] = null[i];
+  const double size = high.gaps.cwiseAbs().maxCoeff();
+  for (double step : {0.05, 0.02, 0.1, 0.01}) {
+    try {
+      sweep::Solution solution = sweep::branch_off(two, base, direction, step * size, continuation);
+      if (period_two_share(solution, rows) > 10.0 * kJoinedShare) return solution;
     } catch (const SolverError&) {
     }
   }
@@ -354,18 +416,28 @@ SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const S
   }
   if (switch_branch) {
     const sweep::HarmonicBalance two(system, balance_options(system, section.harmonics, 2));
-    const std::optional<sweep::Solution> start = period_two_start(system, hb, two, period_one);
+    const std::optional<sweep::Solution> start = period_two_start(system, hb, two, period_one, continuation);
     period_one.clear();
     if (!start) {
       result.warnings.push_back("subharmonic 2: no period doubling of the period-one branch in the range (or no "
                                 "period-two solution found from it): no period-two branch");
     } else {
+      // Each segment ends where the branch rejoins the period-one one, or where its odd part reverses
+      // from one point to the next: it went through the doubling onto its own image shifted by one
+      // excitation period (the same orbit).
+      const std::vector<Index> odd = odd_unknowns(system.n_rows(), section.harmonics);
+      VectorX previous_odd;
       recorder.keep_going = [&](const sweep::Solution& solution) {
-        return period_two_share(solution, system.n_rows()) > kJoinedShare;
+        VectorX part = odd_part(solution, odd);
+        const bool reversed = part.dot(previous_odd) < 0.0;
+        previous_odd = std::move(part);
+        return !reversed && period_two_share(solution, system.n_rows()) > kJoinedShare;
       };
-      for (const double end : {from, to}) {
+      // down, then up from the start, each within the whole range (a branch may turn back past its start)
+      for (const auto& [begin, end] : {std::pair(to, from), std::pair(from, to)}) {
+        previous_odd = odd_part(*start, odd);
         recorder.start_segment();
-        sweep::continue_branch(two, start->omega, end, continuation, std::ref(recorder), &*start);
+        sweep::continue_branch(two, begin, end, continuation, std::ref(recorder), &*start);
       }
     }
   }
@@ -483,10 +555,15 @@ spectral::PlotResult plot_sweep(const std::filesystem::path& png, const SweepRes
   for (const SweepPoint& point : result.points) largest = std::max(largest, amplitude_of(point, probe, nu, nu));
   const double floor = largest > 0.0 ? 1e-12 * largest : 1e-300;
   // Stable runs in data block 0, unstable runs in block 1, each run carried on to the next one's first point.
+  // An order below the floor (round-off, or A1/2 of a period-one point) is not drawn (nan): on the log
+  // scale it would pull the axis down to the round-off.
   std::string blocks[2];
   const auto row = [&](const SweepPoint& point) {
     std::string line = number_text(point.frequency_hz());
-    for (int k : orders) line += " " + number_text(std::max(amplitude_of(point, probe, k, nu), floor));
+    for (int k : orders) {
+      const double amplitude = amplitude_of(point, probe, k, nu);
+      line += " " + (amplitude > floor ? number_text(amplitude) : std::string("nan"));
+    }
     return line + "\n";
   };
   int current = 0;
@@ -514,7 +591,7 @@ spectral::PlotResult plot_sweep(const std::filesystem::path& png, const SweepRes
   const double low = std::min(settings.from_hz, settings.to_hz), high = std::max(settings.from_hz, settings.to_hz);
   body += "set xrange [" + number_text(low) + ":" + number_text(high) + "]\n";
   if (settings.bilinear_hz > 0.0) {
-    for (const auto& [divisor, label] : std::vector<std::pair<double, std::string>>{{2, "f_b/2"}, {3, "f_b/3"}, {1, "f_b"}}) {
+    for (const auto& [divisor, label] : std::vector<std::pair<double, std::string>>{{2, "f_b/2"}, {3, "f_b/3"}, {1, "f_b"}, {0.5, "2 f_b"}}) {
       const double x = settings.bilinear_hz / divisor;
       if (x < low || x > high) continue;
       body += "set arrow from " + number_text(x) + ", graph 0 to " + number_text(x) +

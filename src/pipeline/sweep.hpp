@@ -82,10 +82,12 @@ using SweepProgress = std::function<void(const SweepResult&, double fraction)>;
 
 /// Harmonic-balance sweep: continuation from from_hz to to_hz (started from the linear solution).
 /// With `subharmonic: 2` (and stability): the period-one branch (H/2 harmonics of the excitation, the
-/// same orders), then from the most unstable point of its first period-doubling region the period-two
-/// branch (nu = 2, H harmonics of half the excitation; started from the critical Floquet mode)
-/// continued down and up until it rejoins the period-one branch (its A1/2 share of the gaps < 1e-3) or
-/// leaves the range. `completed` refers to the period-one branch.
+/// same orders), then the period-two branch (nu = 2, H harmonics of half the excitation) from its first
+/// period doubling: where the odd-harmonic block of the nu = 2 Jacobian turns singular along the
+/// period-one branch (bisection in Omega), `sweep::branch_off` along the block's null vector; continued
+/// down and up over the whole range until it rejoins the period-one branch (its A1/2 share of the gaps
+/// < 1e-3), its odd part reverses (it went through the doubling) or it leaves the range. `completed`
+/// refers to the period-one branch.
 SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const SweepSettings& settings,
                                    const SweepProgress& progress = SweepProgress());
 

@@ -55,6 +55,50 @@ VectorX tangent(const MatrixX& jacobian, const VectorX& previous) {
   return t;
 }
 
+/// A corrected point: the state, the corrector's iterations and final residual, and the factorised
+/// bordered matrix [dr/dy; t^T] of its last iteration.
+struct Corrected {
+  VectorX y;
+  int iterations = 0;
+  double residual = 0.0;
+  Eigen::PartialPivLU<MatrixX> bordered;
+};
+
+/// Keller's corrector from the predictor y_base + ds t: Newton on [r(y); t^T (y - y_base) - ds], full
+/// steps first, then backtracking on the extended residual (piecewise-linear contact can make plain
+/// Newton cycle between two active-sample patterns near a kink). False when it does not converge
+/// within `max_iterations`.
+bool correct(const HarmonicBalance& hb, double omega_ref, const VectorX& y_base, const VectorX& t, double ds,
+             int target_iterations, int max_iterations, Corrected& c) {
+  const Index n = hb.n_unknowns();
+  const double tolerance = hb.options().tolerance;
+  c.y = y_base + ds * t;
+  for (c.iterations = 1; c.iterations <= max_iterations; ++c.iterations) {
+    Extended e = evaluate(hb, c.y, omega_ref);
+    MatrixX a(n + 1, n + 1);
+    a.topRows(n) = e.jacobian;
+    a.row(n) = t.transpose();
+    VectorX rhs(n + 1);
+    rhs.head(n) = -e.residual;
+    rhs[n] = -(t.dot(c.y - y_base) - ds);
+    c.bordered.compute(a);
+    const VectorX delta = c.bordered.solve(rhs);
+    const double merit = rhs.squaredNorm();
+    double alpha = 1.0;
+    VectorX trial = c.y + delta;
+    while (c.iterations > target_iterations && alpha > 1.0 / 256.0) {
+      if (extended_merit(hb, trial, omega_ref, t, y_base, ds) < merit) break;
+      alpha *= 0.5;
+      trial = c.y + alpha * delta;
+    }
+    c.y = trial;
+    if (!c.y.allFinite()) return false;
+    c.residual = hb.residual(c.y[n] * omega_ref, c.y.head(n) * hb.gap_scale()).lpNorm<Eigen::Infinity>();
+    if (c.residual <= tolerance && delta.lpNorm<Eigen::Infinity>() <= 1e3 * tolerance + 1e-8) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega_from, double omega_to,
@@ -65,7 +109,6 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
                      " and " + format_number(omega_to) + " rad/s");
   const Index n = hb.n_unknowns();
   const double omega_ref = omega_from;
-  const double tolerance = hb.options().tolerance;
   const double w_low = std::min(omega_from, omega_to) / omega_ref;
   const double w_high = std::max(omega_from, omega_to) / omega_ref;
   const double direction = omega_to > omega_from ? 1.0 : -1.0;
@@ -108,68 +151,58 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
   double ds = options.initial_step;
   const int max_corrector = std::max(8, 3 * options.target_iterations);
   while (static_cast<int>(branch.size()) < options.max_points) {
-    bool accepted = false;
-    VectorX y_new;
-    int iterations = 0;
-    double residual = 0.0;
-    Eigen::PartialPivLU<MatrixX> bordered;  // [dr/dy; t^T] of the last corrector iteration
-    while (!accepted) {
-      y_new = y + ds * t;
-      for (iterations = 1; iterations <= max_corrector; ++iterations) {
-        Extended c = evaluate(hb, y_new, omega_ref);
-        MatrixX a(n + 1, n + 1);
-        a.topRows(n) = c.jacobian;
-        a.row(n) = t.transpose();
-        VectorX rhs(n + 1);
-        rhs.head(n) = -c.residual;
-        rhs[n] = -(t.dot(y_new - y) - ds);
-        bordered.compute(a);
-        const VectorX delta = bordered.solve(rhs);
-        // full steps first, then backtracking on the extended residual: piecewise-linear contact can
-        // make plain Newton cycle between two active-sample patterns near a kink
-        const double merit = rhs.squaredNorm();
-        double alpha = 1.0;
-        VectorX trial = y_new + delta;
-        while (iterations > options.target_iterations && alpha > 1.0 / 256.0) {
-          const double m_trial = extended_merit(hb, trial, omega_ref, t, y, ds);
-          if (m_trial < merit) break;
-          alpha *= 0.5;
-          trial = y_new + alpha * delta;
-        }
-        y_new = trial;
-        if (!y_new.allFinite()) break;
-        residual = hb.residual(y_new[n] * omega_ref, y_new.head(n) * hb.gap_scale()).lpNorm<Eigen::Infinity>();
-        if (residual <= tolerance && delta.lpNorm<Eigen::Infinity>() <= 1e3 * tolerance + 1e-8) {
-          accepted = true;
-          break;
-        }
-      }
-      if (!accepted) {
-        ds *= 0.5;
-        if (ds < options.min_step) return branch;  // cannot go on: the branch so far
-      }
+    Corrected c;
+    while (!correct(hb, omega_ref, y, t, ds, options.target_iterations, max_corrector, c)) {
+      ds *= 0.5;
+      if (ds < options.min_step) return branch;  // cannot go on: the branch so far
     }
     // The new tangent from the last corrector matrix: its Jacobian is that of a point within the
     // corrector's last step (<= 1e3 tolerance) of y_new, its last row the tangent it is oriented along
     // (the same bordered system tangent() solves; one factorisation per point saved).
-    VectorX t_new = bordered.solve(VectorX::Unit(n + 1, n));
+    VectorX t_new = c.bordered.solve(VectorX::Unit(n + 1, n));
     t_new.normalize();
     if (t_new.dot(t) < 0.0) t_new = -t_new;
-    y = y_new;
+    y = c.y;
     t = t_new;
     Solution sol;
     sol.omega = y[n] * omega_ref;
     sol.gaps = y.head(n) * hb.gap_scale();
-    sol.iterations = iterations;
-    sol.residual = residual;
+    sol.iterations = c.iterations;
+    sol.residual = c.residual;
     sol.converged = true;
     hb.complete(sol);
     if (!add_point(std::move(sol), t[n])) return branch;
     if (y[n] > w_high || y[n] < w_low) break;
-    const double factor = std::clamp(static_cast<double>(options.target_iterations) / std::max(iterations, 1), 0.5, 2.0);
+    const double factor = std::clamp(static_cast<double>(options.target_iterations) / std::max(c.iterations, 1), 0.5, 2.0);
     ds = std::clamp(ds * factor, options.min_step, options.max_step);
   }
   return branch;
+}
+
+Solution branch_off(const HarmonicBalance& hb, const Solution& base, const VectorX& direction, double step,
+                    const ContinuationOptions& options) {
+  const Index n = hb.n_unknowns();
+  if (base.gaps.size() != n || direction.size() != n || !(direction.norm() > 0.0) || !(step > 0.0))
+    throw InputError("branch_off: need a base solution and a nonzero direction of " + std::to_string(n) +
+                     " gap harmonics and a positive step, got " + std::to_string(base.gaps.size()) + ", " +
+                     std::to_string(direction.size()) + " and " + format_number(step) + " m");
+  const double omega_ref = base.omega;
+  VectorX y(n + 1), t = VectorX::Zero(n + 1);
+  y.head(n) = base.gaps / hb.gap_scale();
+  y[n] = 1.0;
+  t.head(n) = direction.normalized();
+  Corrected c;
+  if (!correct(hb, omega_ref, y, t, step / hb.gap_scale(), options.target_iterations, hb.options().max_iterations, c))
+    throw SolverError("branch_off: the corrector did not converge from Omega = " + format_number(base.omega) +
+                      " rad/s at a step of " + format_number(step) + " m (residual " + format_number(c.residual) + ")");
+  Solution sol;
+  sol.omega = c.y[n] * omega_ref;
+  sol.gaps = c.y.head(n) * hb.gap_scale();
+  sol.iterations = c.iterations;
+  sol.residual = c.residual;
+  sol.converged = true;
+  hb.complete(sol);
+  return sol;
 }
 
 }  // namespace crackle::sweep

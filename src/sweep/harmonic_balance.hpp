@@ -207,4 +207,14 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
                                          const ProgressCallback& progress = ProgressCallback(),
                                          const Solution* start = nullptr);
 
+/// The first point of a branch that crosses the branch of `base` at a bifurcation: Keller's corrector
+/// (Omega free) from `base` along the gap direction `direction` (same layout as the gaps), at the point
+/// whose gaps have moved by `step` [m] along the unit direction. For a period doubling, `hb` is the
+/// nu = 2 solver, `base` the period-one solution near the doubling written in its harmonics and
+/// `direction` the critical mode on the odd ones (period_doubled_guess): the period-one branch has no
+/// odd part, so the constraint keeps the corrector off it. Throws SolverError when the corrector does
+/// not converge within the solver's max_iterations.
+Solution branch_off(const HarmonicBalance& hb, const Solution& base, const VectorX& direction, double step,
+                    const ContinuationOptions& options = ContinuationOptions());
+
 }  // namespace crackle::sweep

@@ -593,18 +593,30 @@ TEST(Continuation, FoldOfAHardeningClearanceOscillator) {
   EXPECT_LT(std::min(std::abs(ti_mid - a_high) / a_high, std::abs(ti_mid - a_low) / a_low), 1e-3);
 }
 
+/// The bilinear oscillator of the period-doubling tests: closed at rest (g0 = 0), open w = 1, closed
+/// w = 2 (bilinear frequency 4/3), 1 % damping; its period-one branch over 2.0 .. 2.6 rad/s, H = 10.
+struct DoublingOscillator {
+  reduced::ReducedSystem s = one_dof(1.0, 0.01, 1.0, 0.0, 1e-6, 0.0, 3.0, 0.0);
+  HarmonicBalanceOptions opt1 = [] {
+    HarmonicBalanceOptions options;
+    options.harmonics = 10;
+    return options;
+  }();
+  HarmonicBalance hb1{s, opt1};
+  ContinuationOptions copt = [] {
+    ContinuationOptions options;
+    options.initial_step = 0.02;
+    options.max_step = 0.02;
+    return options;
+  }();
+  std::vector<BranchPoint> branch = continue_branch(hb1, 2.0, 2.6, copt);
+};
+
 TEST(Continuation, PeriodDoublingOfABilinearOscillator) {
-  // Closed at rest (g0 = 0), open w = 1, closed w = 2: bilinear frequency 4/3. Driven near twice
-  // that, the period-one response loses stability through -1 and a period-two response (A1/2)
-  // takes over (the time integration below settles on it).
-  const auto s = one_dof(1.0, 0.01, 1.0, 0.0, 1e-6, 0.0, 3.0, 0.0);
-  HarmonicBalanceOptions opt1;
-  opt1.harmonics = 10;
-  HarmonicBalance hb1(s, opt1);
-  ContinuationOptions copt;
-  copt.initial_step = 0.02;
-  copt.max_step = 0.02;
-  const auto branch = continue_branch(hb1, 2.0, 2.6, copt);
+  // Driven near twice the bilinear frequency, the period-one response loses stability through -1 and
+  // a period-two response (A1/2) takes over (the time integration below settles on it).
+  const DoublingOscillator oscillator;
+  const auto& [s, opt1, hb1, copt, branch] = oscillator;
   std::size_t doubling = branch.size();
   int n_doubling = 0, n_fold = 0;
   for (std::size_t i = 0; i < branch.size(); ++i) {
@@ -672,6 +684,56 @@ TEST(Continuation, PeriodDoublingOfABilinearOscillator) {
   EXPECT_FALSE(one_stability.stable);
   EXPECT_EQ(one.amplitude(0, 0.5), 0.0);  // a period-one solution has no order 1/2
   EXPECT_NEAR(two.ratios(0).half, std::abs(ref[1]) / std::abs(ref[2]), 0.1 * std::abs(ref[1]) / std::abs(ref[2]));
+}
+
+TEST(Continuation, BranchOffAtAPeriodDoublingReachesTheFixedFrequencySolution) {
+  // The oscillator of the test above. From the period-one solution just past its doubling, written in
+  // nu = 2 harmonics, Keller's corrector along the critical mode (Omega free) lands on the period-two
+  // branch at the requested distance; continued from there, the branch passes Omega = 2.5 through the
+  // solution that Newton finds at that fixed frequency from the critical mode: two routes, one solution.
+  const DoublingOscillator oscillator;
+  const auto& [s, opt1, hb1, copt, branch] = oscillator;
+  std::size_t doubling = 0;
+  while (doubling < branch.size() && !branch[doubling].period_doubling) ++doubling;
+  ASSERT_LT(doubling, branch.size());
+  const Solution& one = branch[doubling].solution;
+  HarmonicBalanceOptions opt2;
+  opt2.harmonics = 20;
+  opt2.subharmonic = 2;
+  HarmonicBalance hb2(s, opt2);
+  Solution base;
+  base.omega = one.omega;
+  base.gaps = period_doubled_guess(s, one, Stability(), opt2.harmonics, 0.0);
+  const double size = one.gaps.cwiseAbs().maxCoeff();
+  const VectorX direction = period_doubled_guess(s, one, branch[doubling].stability, opt2.harmonics, size) - base.gaps;
+  const double step = 0.05 * size;
+  const Solution start = branch_off(hb2, base, direction, step, copt);
+  EXPECT_LE(start.residual, opt2.tolerance);
+  EXPECT_NEAR(direction.normalized().dot(start.gaps - base.gaps), step, 1e-9 * size);  // the arclength constraint
+  EXPECT_GT(start.amplitude(0, 0.5), 0.0);
+  std::printf("  branch off at Omega = %.5f (doubling flagged between %.5f and %.5f): A1/2 %.4e\n", start.omega,
+              branch[doubling - 1].solution.omega, one.omega, start.amplitude(0, 0.5));
+  EXPECT_GT(start.omega, branch[doubling - 1].solution.omega - 0.05);
+  EXPECT_LT(start.omega, 2.5);
+
+  std::vector<BranchPoint> period_two;
+  const auto to_two_and_a_half = [&](const BranchPoint& point) {
+    period_two.push_back(point);
+    return point.solution.omega < 2.5;
+  };
+  continue_branch(hb2, start.omega, 2.6, copt, to_two_and_a_half, &start);
+  ASSERT_GE(period_two.size(), 2u);
+  const BranchPoint& after = period_two.back();
+  const BranchPoint& before = period_two[period_two.size() - 2];
+  ASSERT_GE(after.solution.omega, 2.5);
+  const double w = (2.5 - before.solution.omega) / (after.solution.omega - before.solution.omega);
+  const Solution fixed = hb2.solve(2.5, (1.0 - w) * before.solution.gaps + w * after.solution.gaps);
+  const Solution from_mode = hb2.solve(2.5, period_doubled_guess(s, hb1.solve(2.5), hb1.hill_stability(hb1.solve(2.5)),
+                                                                 opt2.harmonics, size));
+  std::printf("  Omega = 2.5: A1/2 from the branch %.8e, from the critical mode %.8e\n", fixed.amplitude(0, 0.5),
+              from_mode.amplitude(0, 0.5));
+  EXPECT_NEAR(fixed.amplitude(0, 0.5), from_mode.amplitude(0, 0.5), 1e-8 * from_mode.amplitude(0, 0.5));
+  EXPECT_GT(fixed.amplitude(0, 0.5), fixed.amplitude(0, 1.0));
 }
 
 }  // namespace
