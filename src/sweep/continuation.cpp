@@ -1,6 +1,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "core/errors.hpp"
 #include "sweep/harmonic_balance.hpp"
@@ -9,10 +10,16 @@ namespace crackle::sweep {
 
 namespace {
 
-/// Scaled state y = (G / s, Omega / Omega_ref) and its extended Jacobian [dr/dx, dr/dw].
+/// Scaled state y = (G / s, Omega / Omega_ref): the residual and the linearisation of its extended
+/// Jacobian [dr/dx, dr/dw] (dense or matrix-free, HarmonicBalance::linearize).
 struct Extended {
-  MatrixX jacobian;  ///< n x (n + 1)
+  std::unique_ptr<Linearization> linear;
+  VectorX column;    ///< dr/dw = dr/dOmega Omega_ref, n
   VectorX residual;  ///< n
+  /// Solves [dr/dx dr/dw; row^T] x = b.
+  VectorX solve_bordered(const VectorX& row, const VectorX& b, double tolerance) const {
+    return linear->solve_bordered(column, row, b, tolerance);
+  }
 };
 
 Extended evaluate(const HarmonicBalance& hb, const VectorX& y, double omega_ref) {
@@ -20,13 +27,21 @@ Extended evaluate(const HarmonicBalance& hb, const VectorX& y, double omega_ref)
   const double omega = y[n] * omega_ref;
   const VectorX gaps = y.head(n) * hb.gap_scale();
   Extended e;
-  VectorX d_omega;
-  e.jacobian.resize(n, n + 1);
-  e.jacobian.leftCols(n) = hb.jacobian(omega, gaps, &d_omega);
-  e.jacobian.col(n) = d_omega * omega_ref;
+  e.linear = hb.linearize(omega, gaps, true);
+  e.column = e.linear->d_omega() * omega_ref;
   e.residual = hb.residual(omega, gaps);
   return e;
 }
+
+/// Relative tolerance of an iterative bordered solve on a right-hand side of 2-norm `norm`
+/// (superlinear forcing, no tighter than the Newton tolerance needs); the dense solver ignores it.
+double forcing(double norm, double tolerance) {
+  if (!(norm > 0.0)) return 0.5;
+  return std::clamp(std::max(std::min(1e-2, norm), 0.5 * tolerance / norm), 1e-14, 0.5);
+}
+
+/// Relative tolerance of the tangent's solves.
+constexpr double kTangentTolerance = 1e-10;
 
 double extended_merit(const HarmonicBalance& hb, const VectorX& y, double omega_ref, const VectorX& t,
                       const VectorX& y_prev, double ds) {
@@ -42,14 +57,9 @@ bool same_counts(const Stability& a, const Stability& b) {
 }
 
 /// Unit tangent: null vector of the n x (n+1) Jacobian, oriented along `previous`.
-VectorX tangent(const MatrixX& jacobian, const VectorX& previous) {
-  const Index n = jacobian.rows();
-  MatrixX a(n + 1, n + 1);
-  a.topRows(n) = jacobian;
-  a.row(n) = previous.transpose();
-  VectorX rhs = VectorX::Zero(n + 1);
-  rhs[n] = 1.0;
-  VectorX t = a.partialPivLu().solve(rhs);
+VectorX tangent(const Extended& e, const VectorX& previous) {
+  const Index n = e.residual.size();
+  VectorX t = e.solve_bordered(previous, VectorX::Unit(n + 1, n), kTangentTolerance);
   t.normalize();
   if (t.dot(previous) < 0.0) t = -t;
   return t;
@@ -102,7 +112,7 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
   VectorX t_prev = VectorX::Zero(n + 1);
   t_prev[n] = direction;
   Extended e = evaluate(hb, y, omega_ref);
-  VectorX t = tangent(e.jacobian, t_prev);
+  VectorX t = tangent(e, t_prev);
   if (!add_point(std::move(first), t[n])) return branch;
 
   double ds = options.initial_step;
@@ -112,19 +122,15 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
     VectorX y_new;
     int iterations = 0;
     double residual = 0.0;
-    Eigen::PartialPivLU<MatrixX> bordered;  // [dr/dy; t^T] of the last corrector iteration
+    Extended bordered;  // the linearisation [dr/dy; t^T] of the last corrector iteration
     while (!accepted) {
       y_new = y + ds * t;
       for (iterations = 1; iterations <= max_corrector; ++iterations) {
-        Extended c = evaluate(hb, y_new, omega_ref);
-        MatrixX a(n + 1, n + 1);
-        a.topRows(n) = c.jacobian;
-        a.row(n) = t.transpose();
+        bordered = evaluate(hb, y_new, omega_ref);
         VectorX rhs(n + 1);
-        rhs.head(n) = -c.residual;
+        rhs.head(n) = -bordered.residual;
         rhs[n] = -(t.dot(y_new - y) - ds);
-        bordered.compute(a);
-        const VectorX delta = bordered.solve(rhs);
+        const VectorX delta = bordered.solve_bordered(t, rhs, forcing(rhs.norm(), tolerance));
         // full steps first, then backtracking on the extended residual: piecewise-linear contact can
         // make plain Newton cycle between two active-sample patterns near a kink
         const double merit = rhs.squaredNorm();
@@ -152,7 +158,7 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
     // The new tangent from the last corrector matrix: its Jacobian is that of a point within the
     // corrector's last step (<= 1e3 tolerance) of y_new, its last row the tangent it is oriented along
     // (the same bordered system tangent() solves; one factorisation per point saved).
-    VectorX t_new = bordered.solve(VectorX::Unit(n + 1, n));
+    VectorX t_new = bordered.solve_bordered(t, VectorX::Unit(n + 1, n), kTangentTolerance);
     t_new.normalize();
     if (t_new.dot(t) < 0.0) t_new = -t_new;
     y = y_new;
