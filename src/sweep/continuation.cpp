@@ -33,13 +33,6 @@ Extended evaluate(const HarmonicBalance& hb, const VectorX& y, double omega_ref)
   return e;
 }
 
-/// Relative tolerance of an iterative bordered solve on a right-hand side of 2-norm `norm`
-/// (superlinear forcing, no tighter than the Newton tolerance needs); the dense solver ignores it.
-double forcing(double norm, double tolerance) {
-  if (!(norm > 0.0)) return 0.5;
-  return std::clamp(std::max(std::min(1e-2, norm), 0.5 * tolerance / norm), 1e-14, 0.5);
-}
-
 /// Relative tolerance of the tangent's solves.
 constexpr double kTangentTolerance = 1e-10;
 
@@ -130,7 +123,7 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
         VectorX rhs(n + 1);
         rhs.head(n) = -bordered.residual;
         rhs[n] = -(t.dot(y_new - y) - ds);
-        const VectorX delta = bordered.solve_bordered(t, rhs, forcing(rhs.norm(), tolerance));
+        const VectorX delta = bordered.solve_bordered(t, rhs, inexact_forcing(rhs.norm(), tolerance));
         // full steps first, then backtracking on the extended residual: piecewise-linear contact can
         // make plain Newton cycle between two active-sample patterns near a kink
         const double merit = rhs.squaredNorm();

@@ -393,13 +393,6 @@ struct HarmonicBalance::Impl {
     }
   }
 
-  /// Relative tolerance of an inexact Newton step on a residual of 2-norm `norm`: superlinear
-  /// forcing min(1e-2, norm), but never tighter than half the Newton tolerance needs.
-  double forcing(double norm) const {
-    if (!(norm > 0.0)) return 0.5;
-    return std::clamp(std::max(std::min(1e-2, norm), 0.5 * options.tolerance / norm), 1e-14, 0.5);
-  }
-
   /// Scaled Jacobian I - H dP/dG.
   MatrixX jacobian(const std::vector<HarmonicReceptance>& rec, const VectorX& gaps, double factor = 1.0) const {
     const Index n = n_unknowns();
@@ -430,7 +423,7 @@ struct HarmonicBalance::Impl {
     int it = 0;
     while (norm > options.tolerance && it < options.max_iterations) {
       ++it;
-      const VectorX step = linearize(rec, gaps, factor)->solve(-r, forcing(r.norm())) * scale;
+      const VectorX step = linearize(rec, gaps, factor)->solve(-r, inexact_forcing(r.norm(), options.tolerance)) * scale;
       // full steps first (the piecewise-linear contact mostly converges in a few), then backtracking
       // on the 2-norm of the residual against the cycles plain Newton can fall into
       double alpha = 1.0;

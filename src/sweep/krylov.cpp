@@ -92,6 +92,11 @@ GmresReport gmres(const LinearAction& apply, const LinearAction& precondition, c
   }
 }
 
+double inexact_forcing(double norm, double tolerance) {
+  if (!(norm > 0.0)) return 0.5;
+  return std::clamp(std::max(std::min(1e-2, norm), 0.5 * tolerance / norm), 1e-14, 0.5);
+}
+
 void apply_receptance(const reduced::ReducedSystem& system, const std::vector<Eigen::VectorXcd>& modal,
                       const VectorX& p, VectorX& g, bool residual) {
   const Index c = system.n_rows();

@@ -46,6 +46,10 @@ struct GmresReport {
 GmresReport gmres(const LinearAction& apply, const LinearAction& precondition, const VectorX& b, VectorX& x,
                   double tolerance, int max_iterations, int restart);
 
+/// Relative tolerance of an inexact Newton step whose right-hand side has 2-norm `norm`: superlinear
+/// forcing min(1e-2, norm), never tighter than half the Newton `tolerance` needs (clamped to [1e-14, 0.5]).
+double inexact_forcing(double norm, double tolerance);
+
 /// dP/dG of one pair: rows `first` .. `first + rows - 1`, (rows (2H+1))^2, index component * rows + local
 /// row on both sides (component 0 = mean, 2k-1 = cos k, 2k = sin k).
 struct PairDerivative {
