@@ -11,6 +11,7 @@
 #include "core/errors.hpp"
 #include "core/resources.hpp"
 #include "io/files.hpp"
+#include "sweep/harmonic_balance.hpp"
 
 namespace crackle::pipeline {
 namespace {
@@ -81,6 +82,33 @@ void check_memory(const scene::Scene& scene, int matrices) {
                    " nodes, " + number_text(mesh.elements) + " elements, " + number_text(mesh.dofs) +
                    " DOFs, which need at least " + bytes_text(needed) + " for the mesh" + matrix_text +
                    " and the vectors, more than the " + bytes_text(available) + " available (" + source + ")");
+}
+
+void check_sweep_memory(const scene::Scene& scene, Index rows, Index modes) {
+  if (!scene.sweep || scene.sweep->method != "harmonic_balance") return;
+  const scene::SweepSection& section = *scene.sweep;
+  sweep::HarmonicBalanceOptions options;
+  options.harmonics = section.harmonics;
+  options.solver = section.solver == "dense"    ? sweep::LinearSolver::dense
+                   : section.solver == "krylov" ? sweep::LinearSolver::krylov
+                                                : sweep::LinearSolver::automatic;
+  const bool matrix_free = sweep::HarmonicBalance::selects_matrix_free(options, rows);
+  const double needed = sweep::HarmonicBalance::memory_bytes(rows, modes, section.harmonics, matrix_free);
+  std::string source;
+  const double available = available_memory_bytes(&source);
+  if (needed <= available) return;
+  const double unknowns = static_cast<double>(rows) * (2.0 * section.harmonics + 1.0);
+  std::string hint;
+  if (!matrix_free) {
+    const double krylov = sweep::HarmonicBalance::memory_bytes(rows, modes, section.harmonics, true);
+    hint = krylov <= available ? "; sweep.solver: krylov (or auto) would need " + bytes_text(krylov)
+                               : "; the krylov solver would need " + bytes_text(krylov);
+  }
+  throw InputError(scene.where("sweep.harmonics") + ": expected a harmonic balance that fits in memory, got " +
+                   std::to_string(rows) + " pair rows x (2 x " + std::to_string(section.harmonics) + " + 1) = " +
+                   number_text(unknowns) + " unknowns, which need at least " + bytes_text(needed) + " with the " +
+                   (matrix_free ? "krylov" : "dense") + " solver, more than the " + bytes_text(available) +
+                   " available (" + source + ")" + hint);
 }
 
 void check_run_outputs(const scene::Scene& scene, const MeshEstimate& mesh, double steps, double probe_rows,

@@ -39,6 +39,11 @@ double estimate_memory_bytes(const scene::Scene& scene, const MeshEstimate& mesh
 /// mesh and operators cannot fit in memory. Call before build_model.
 void check_memory(const scene::Scene& scene, int matrices);
 
+/// Refuses (InputError naming sweep.harmonics) a harmonic-balance sweep whose solver cannot fit in
+/// memory with `rows` pair rows and `modes` modes (sweep::HarmonicBalance::memory_bytes, the dense or
+/// matrix-free solver as sweep.solver selects it). Call once the reduced model's size is known.
+void check_sweep_memory(const scene::Scene& scene, Index rows, Index modes);
+
 /// Refuses a run whose histories (probes at full rate for the spectrum, probes.csv rows, energy
 /// rows) cannot fit in memory, naming the run-length key; and snapshots that cannot fit on the
 /// disk of `directory` or that outnumber the steps, naming transient.snapshots.count.

@@ -290,10 +290,14 @@ double period_two_share(const sweep::Solution& solution, Index rows) {
 constexpr double kJoinedShare = 1e-3;  ///< a nu = 2 point below this share has rejoined the period-one branch
 
 /// The solver options of a sweep with `harmonics` of the base frequency Omega / nu.
-sweep::HarmonicBalanceOptions balance_options(const reduced::ReducedSystem& system, int harmonics, int nu) {
+sweep::HarmonicBalanceOptions balance_options(const reduced::ReducedSystem& system, int harmonics, int nu,
+                                              const std::string& solver) {
   sweep::HarmonicBalanceOptions options;
   options.harmonics = harmonics;
   options.subharmonic = nu;
+  options.solver = solver == "dense"    ? sweep::LinearSolver::dense
+                   : solver == "krylov" ? sweep::LinearSolver::krylov
+                                        : sweep::LinearSolver::automatic;
   // The arclength runs in (G / s, Omega / Omega_from): with s the static gap response the many gap
   // harmonics dominate it near a super-harmonic resonance and the frequency creeps (thousands of
   // points). A larger s makes the step mostly frequency (the Newton tolerance is on r / s).
@@ -400,7 +404,7 @@ SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const S
   // period-two branch from its first period doubling, both ways until it rejoins the period-one branch
   const sweep::HarmonicBalance hb(
       system, balance_options(system, switch_branch ? std::max(1, section.harmonics / 2) : section.harmonics,
-                              switch_branch ? 1 : section.subharmonic));
+                              switch_branch ? 1 : section.subharmonic, section.solver));
   SweepResult result;
   BranchRecorder recorder(settings, result, progress);
   std::vector<sweep::BranchPoint> period_one;
@@ -415,7 +419,7 @@ SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const S
                               "period-one response (A1/2 = 0); set sweep.stability: true (frictionless contact)");
   }
   if (switch_branch) {
-    const sweep::HarmonicBalance two(system, balance_options(system, section.harmonics, 2));
+    const sweep::HarmonicBalance two(system, balance_options(system, section.harmonics, 2, section.solver));
     const std::optional<sweep::Solution> start = period_two_start(system, hb, two, period_one, continuation);
     period_one.clear();
     if (!start) {
@@ -442,6 +446,8 @@ SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const S
     }
   }
   add_harmonics_warning(settings, hb.options().top_threshold, recorder.flagged(), recorder.first_flagged_hz(), result);
+  result.linear_solver = hb.matrix_free() ? "krylov" : "dense";
+  result.krylov = hb.krylov_statistics();
   result.solve_s = clock.seconds();
   return result;
 }
@@ -526,6 +532,15 @@ nlohmann::json sweep_json(const SweepResult& result, const SweepSettings& settin
     events.push_back(entry);
   }
   document["events"] = events;
+  if (!result.linear_solver.empty()) {
+    nlohmann::json linear = {{"kind", result.linear_solver}};
+    if (result.linear_solver == "krylov")
+      linear.update({{"gmres_solves", result.krylov.solves}, {"gmres_iterations", result.krylov.iterations},
+                     {"gmres_max_iterations", result.krylov.max_iterations},
+                     {"preconditioner_factors", result.krylov.factorisations},
+                     {"gmres_unconverged", result.krylov.unconverged}});
+    document["linear_solver"] = linear;
+  }
   nlohmann::json probes = nlohmann::json::object();
   for (const SweepProbe& probe : settings.probes) {
     const auto ratio = [&](double order) {

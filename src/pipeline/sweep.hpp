@@ -74,6 +74,8 @@ struct SweepResult {
   std::vector<std::string> warnings;  ///< H-convergence, unsettled frequencies, an unfinished branch
   double max_top_share = 0.0;         ///< largest top-harmonic share of the gap response
   double solve_s = 0.0;               ///< seconds spent in the solver
+  std::string linear_solver;          ///< harmonic_balance: "dense" or "krylov" (of the period-one branch)
+  sweep::KrylovStatistics krylov;     ///< harmonic_balance with krylov: GMRES statistics (both branches)
   bool completed = true;              ///< the branch reached the end of the range
 };
 

@@ -362,6 +362,10 @@ Param build_parameters() {
                           "period to the next.").above(0).defaults_to("1e-6"),
       integer("max_periods", "stepped_sine: periods run at most per frequency (a warning names the frequencies "
                              "that did not settle).").at_least(2).defaults_to("2000"),
+      choice("solver", "harmonic_balance's linear solves: dense (the Jacobian of pairs x (2H+1) unknowns "
+                       "formed and LU-factorised, cost ~ unknowns^3), krylov (matrix-free GMRES preconditioned "
+                       "by the mean contact stiffness, no square matrix), auto (dense up to 1500 unknowns).",
+             {"auto", "dense", "krylov"}).defaults_to("auto"),
     }).optional_section(),
   });
   // clang-format on
@@ -746,6 +750,7 @@ SweepSection sweep_from(const Values& values, const Scene& scene) {
   sweep.points = values.integer("sweep.points");
   sweep.tolerance = values.number("sweep.tolerance");
   sweep.max_periods = values.integer("sweep.max_periods");
+  sweep.solver = values.word("sweep.solver");
   return sweep;
 }
 

@@ -192,6 +192,7 @@ struct SweepSection {
   int points = 200;                ///< at least this many points (harmonic_balance), or frequencies each way (stepped_sine)
   double tolerance = 1e-6;         ///< stepped_sine: steady when no harmonic changes more than this x A1 over a period
   int max_periods = 2000;          ///< stepped_sine: periods per frequency at most
+  std::string solver = "auto";     ///< harmonic_balance linear solves: auto | dense | krylov
 };
 
 /// `mesh.box.grading`: where (mode) and how (layers, ratio; auto resolved from the order) the box

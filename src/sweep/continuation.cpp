@@ -1,6 +1,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "core/errors.hpp"
 #include "sweep/harmonic_balance.hpp"
@@ -9,10 +10,16 @@ namespace crackle::sweep {
 
 namespace {
 
-/// Scaled state y = (G / s, Omega / Omega_ref) and its extended Jacobian [dr/dx, dr/dw].
+/// Scaled state y = (G / s, Omega / Omega_ref): the residual and the linearisation of its extended
+/// Jacobian [dr/dx, dr/dw] (dense or matrix-free, HarmonicBalance::linearize).
 struct Extended {
-  MatrixX jacobian;  ///< n x (n + 1)
+  std::unique_ptr<Linearization> linear;
+  VectorX column;    ///< dr/dw = dr/dOmega Omega_ref, n
   VectorX residual;  ///< n
+  /// Solves [dr/dx dr/dw; row^T] x = b.
+  VectorX solve_bordered(const VectorX& row, const VectorX& b, double tolerance) const {
+    return linear->solve_bordered(column, row, b, tolerance);
+  }
 };
 
 Extended evaluate(const HarmonicBalance& hb, const VectorX& y, double omega_ref) {
@@ -20,13 +27,14 @@ Extended evaluate(const HarmonicBalance& hb, const VectorX& y, double omega_ref)
   const double omega = y[n] * omega_ref;
   const VectorX gaps = y.head(n) * hb.gap_scale();
   Extended e;
-  VectorX d_omega;
-  e.jacobian.resize(n, n + 1);
-  e.jacobian.leftCols(n) = hb.jacobian(omega, gaps, &d_omega);
-  e.jacobian.col(n) = d_omega * omega_ref;
+  e.linear = hb.linearize(omega, gaps, true);
+  e.column = e.linear->d_omega() * omega_ref;
   e.residual = hb.residual(omega, gaps);
   return e;
 }
+
+/// Relative tolerance of the tangent's solves.
+constexpr double kTangentTolerance = 1e-10;
 
 double extended_merit(const HarmonicBalance& hb, const VectorX& y, double omega_ref, const VectorX& t,
                       const VectorX& y_prev, double ds) {
@@ -42,26 +50,21 @@ bool same_counts(const Stability& a, const Stability& b) {
 }
 
 /// Unit tangent: null vector of the n x (n+1) Jacobian, oriented along `previous`.
-VectorX tangent(const MatrixX& jacobian, const VectorX& previous) {
-  const Index n = jacobian.rows();
-  MatrixX a(n + 1, n + 1);
-  a.topRows(n) = jacobian;
-  a.row(n) = previous.transpose();
-  VectorX rhs = VectorX::Zero(n + 1);
-  rhs[n] = 1.0;
-  VectorX t = a.partialPivLu().solve(rhs);
+VectorX tangent(const Extended& e, const VectorX& previous) {
+  const Index n = e.residual.size();
+  VectorX t = e.solve_bordered(previous, VectorX::Unit(n + 1, n), kTangentTolerance);
   t.normalize();
   if (t.dot(previous) < 0.0) t = -t;
   return t;
 }
 
-/// A corrected point: the state, the corrector's iterations and final residual, and the factorised
-/// bordered matrix [dr/dy; t^T] of its last iteration.
+/// A corrected point: the state, the corrector's iterations and final residual, and the linearisation
+/// of its last iteration (the bordered matrix [dr/dy; t^T] is solved through it).
 struct Corrected {
   VectorX y;
   int iterations = 0;
   double residual = 0.0;
-  Eigen::PartialPivLU<MatrixX> bordered;
+  Extended bordered;
 };
 
 /// Keller's corrector from the predictor y_base + ds t: Newton on [r(y); t^T (y - y_base) - ds], full
@@ -74,15 +77,11 @@ bool correct(const HarmonicBalance& hb, double omega_ref, const VectorX& y_base,
   const double tolerance = hb.options().tolerance;
   c.y = y_base + ds * t;
   for (c.iterations = 1; c.iterations <= max_iterations; ++c.iterations) {
-    Extended e = evaluate(hb, c.y, omega_ref);
-    MatrixX a(n + 1, n + 1);
-    a.topRows(n) = e.jacobian;
-    a.row(n) = t.transpose();
+    c.bordered = evaluate(hb, c.y, omega_ref);
     VectorX rhs(n + 1);
-    rhs.head(n) = -e.residual;
+    rhs.head(n) = -c.bordered.residual;
     rhs[n] = -(t.dot(c.y - y_base) - ds);
-    c.bordered.compute(a);
-    const VectorX delta = c.bordered.solve(rhs);
+    const VectorX delta = c.bordered.solve_bordered(t, rhs, inexact_forcing(rhs.norm(), tolerance));
     const double merit = rhs.squaredNorm();
     double alpha = 1.0;
     VectorX trial = c.y + delta;
@@ -145,7 +144,7 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
   VectorX t_prev = VectorX::Zero(n + 1);
   t_prev[n] = direction;
   Extended e = evaluate(hb, y, omega_ref);
-  VectorX t = tangent(e.jacobian, t_prev);
+  VectorX t = tangent(e, t_prev);
   if (!add_point(std::move(first), t[n])) return branch;
 
   double ds = options.initial_step;
@@ -159,7 +158,7 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
     // The new tangent from the last corrector matrix: its Jacobian is that of a point within the
     // corrector's last step (<= 1e3 tolerance) of y_new, its last row the tangent it is oriented along
     // (the same bordered system tangent() solves; one factorisation per point saved).
-    VectorX t_new = c.bordered.solve(VectorX::Unit(n + 1, n));
+    VectorX t_new = c.bordered.solve_bordered(t, VectorX::Unit(n + 1, n), kTangentTolerance);
     t_new.normalize();
     if (t_new.dot(t) < 0.0) t_new = -t_new;
     y = c.y;

@@ -6,6 +6,7 @@
 #include <Eigen/Eigenvalues>
 #include <unsupported/Eigen/MatrixFunctions>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <complex>
 #include <string>
@@ -31,7 +32,9 @@ int default_samples(int harmonics) {
 
 /// Receptances of one harmonic: H(omega_k) (c x c) and E(omega_k) (c), with their Omega derivatives.
 struct HarmonicReceptance {
-  ComplexMatrixX pairs;
+  ComplexVectorX modal;    ///< D_r(omega_k), m
+  ComplexVectorX modal_d;  ///< dD_r/dOmega (with d omega_k / d Omega), m
+  ComplexMatrixX pairs;    ///< empty when matrix-free
   ComplexVectorX load;
   ComplexMatrixX pairs_d;  ///< dH/dOmega
   ComplexVectorX load_d;   ///< dE/dOmega
@@ -54,6 +57,9 @@ struct HarmonicBalance::Impl {
   MatrixX basis;      ///< N x (2H+1): 1, cos k tau_j, sin k tau_j (friction tangents)
   fftw_plan forward = nullptr;   ///< r2c, N -> N/2+1
   fftw_plan backward = nullptr;  ///< c2r
+  bool matrix_free = false;
+  mutable std::atomic<long> krylov_solves{0}, krylov_iterations{0}, krylov_factorisations{0}, krylov_unconverged{0};
+  mutable std::atomic<int> krylov_max{0};
 
   Impl(const reduced::ReducedSystem& s, const HarmonicBalanceOptions& o) : system(s), options(o) {}
   ~Impl() {
@@ -81,7 +87,8 @@ struct HarmonicBalance::Impl {
     }
   }
 
-  std::vector<HarmonicReceptance> receptances(double omega, bool derivatives) const {
+  /// The receptances of harmonics 0..H; the c x c matrices only when `dense` (the dense solver's).
+  std::vector<HarmonicReceptance> receptances(double omega, bool derivatives, bool dense) const {
     std::vector<HarmonicReceptance> out(H + 1);
     const MatrixX& bphi = system.pair_modes;
     for (int k = 0; k <= H; ++k) {
@@ -89,6 +96,14 @@ struct HarmonicBalance::Impl {
       ComplexVectorX d, dd;
       modal_receptance(wk, d, dd);
       HarmonicReceptance& h = out[k];
+      h.modal = d;
+      h.modal_d = dd * (static_cast<double>(k) / nu);
+      if (!dense) {
+        h.load = bphi.cast<Complex>() * d.cwiseProduct(system.load_modal.cast<Complex>()) +
+                 system.load_residual.cast<Complex>();
+        if (derivatives) h.load_d = bphi.cast<Complex>() * h.modal_d.cwiseProduct(system.load_modal.cast<Complex>());
+        continue;
+      }
       const ComplexMatrixX scaled = bphi.cast<Complex>() * d.asDiagonal();
       h.pairs = scaled * bphi.transpose().cast<Complex>();
       h.pairs += system.residual.cast<Complex>();
@@ -293,6 +308,15 @@ struct HarmonicBalance::Impl {
   VectorX apply(const std::vector<HarmonicReceptance>& rec, const VectorX& p, bool derivative) const {
     VectorX g = VectorX::Zero(n_unknowns());
     ComplexVectorX pk(c);
+    if (rec[0].pairs.size() == 0 && c > 0) {  // matrix-free: H applied per harmonic from R and U D_k U^T
+      std::vector<ComplexVectorX> modal(H + 1);
+      for (int k = 0; k <= H; ++k) modal[k] = derivative ? rec[k].modal_d : rec[k].modal;
+      apply_receptance(system, modal, p, g, !derivative);
+      const ComplexVectorX& load = derivative ? rec[nu].load_d : rec[nu].load;
+      for (Index i = 0; i < c; ++i) set_amplitude(g, nu, i, amplitude(g, nu, i) + load[i]);
+      if (!derivative) g.head(c) += row_gap;
+      return g;
+    }
     for (int k = 0; k <= H; ++k) {
       for (Index i = 0; i < c; ++i) pk[i] = amplitude(p, k, i);
       const ComplexMatrixX& hk = derivative ? rec[k].pairs_d : rec[k].pairs;
@@ -338,6 +362,37 @@ struct HarmonicBalance::Impl {
     return block;
   }
 
+  /// dP/dG per pair with a closed sample (krylov.hpp's blocks), at the samples of `gaps`.
+  std::vector<PairDerivative> pair_derivatives(const VectorX& gaps, double factor) const {
+    const MatrixX samples = to_time(gaps);
+    std::vector<PairDerivative> out;
+    if (rows_per_pair == 3) {
+      for (Index pair = 0; pair < c / 3; ++pair) {
+        MatrixX block = friction_derivative(samples, pair, factor);
+        if (block.cwiseAbs().maxCoeff() > 0.0) out.push_back({3 * pair, 3, std::move(block)});
+      }
+      return out;
+    }
+    MatrixX slope;
+    law(samples, &slope, factor);
+    for (Index j = 0; j < c; ++j)
+      if (slope.row(j).cwiseAbs().maxCoeff() > 0.0) out.push_back({j, 1, force_derivative(slope, j)});
+    return out;
+  }
+
+  /// The linearisation of the (penalty-scaled) residual at `gaps`, dense or matrix-free.
+  std::unique_ptr<Linearization> linearize(const std::vector<HarmonicReceptance>& rec, const VectorX& gaps,
+                                           double factor) const;
+
+  void record(const GmresReport& report) const {
+    ++krylov_solves;
+    krylov_iterations += report.iterations;
+    if (!report.converged) ++krylov_unconverged;
+    int seen = krylov_max.load();
+    while (report.iterations > seen && !krylov_max.compare_exchange_weak(seen, report.iterations)) {
+    }
+  }
+
   /// Scaled Jacobian I - H dP/dG.
   MatrixX jacobian(const std::vector<HarmonicReceptance>& rec, const VectorX& gaps, double factor = 1.0) const {
     const Index n = n_unknowns();
@@ -368,7 +423,7 @@ struct HarmonicBalance::Impl {
     int it = 0;
     while (norm > options.tolerance && it < options.max_iterations) {
       ++it;
-      const VectorX step = jacobian(rec, gaps, factor).partialPivLu().solve(-r) * scale;
+      const VectorX step = linearize(rec, gaps, factor)->solve(-r, inexact_forcing(r.norm(), options.tolerance)) * scale;
       // full steps first (the piecewise-linear contact mostly converges in a few), then backtracking
       // on the 2-norm of the residual against the cycles plain Newton can fall into
       double alpha = 1.0;
@@ -517,6 +572,7 @@ HarmonicBalance::HarmonicBalance(const reduced::ReducedSystem& system, const Har
     throw InputError("harmonic balance: the reduced system's sizes are inconsistent (m = " + std::to_string(d.m) +
                      ", c = " + std::to_string(d.c) + ")");
   d.rows_per_pair = static_cast<int>(system.rows_per_pair());
+  d.matrix_free = selects_matrix_free(options, d.c);
   d.stiffness = VectorX::Zero(d.c);
   d.row_gap = VectorX::Zero(d.c);
   for (Index pair = 0; pair < system.n_pairs(); ++pair) {
@@ -553,6 +609,114 @@ HarmonicBalance::HarmonicBalance(const reduced::ReducedSystem& system, const Har
 
 HarmonicBalance::~HarmonicBalance() = default;
 
+namespace {
+
+/// J formed and LU-factorised; the bordered matrix's LU is kept for the next solve with the same border.
+class DenseLinearization final : public Linearization {
+ public:
+  DenseLinearization(MatrixX jacobian, VectorX d_omega) : jacobian_(std::move(jacobian)) { d_omega_ = std::move(d_omega); }
+  VectorX solve(const VectorX& b, double) override {
+    if (!factored_) {
+      lu_.compute(jacobian_);
+      factored_ = true;
+    }
+    return lu_.solve(b);
+  }
+  VectorX solve_bordered(const VectorX& column, const VectorX& row, const VectorX& b, double) override {
+    const Index n = jacobian_.rows();
+    if (!(column.size() == column_.size() && row.size() == row_.size() && column == column_ && row == row_)) {
+      MatrixX a(n + 1, n + 1);
+      a.topLeftCorner(n, n) = jacobian_;
+      a.topRightCorner(n, 1) = column;
+      a.row(n) = row.transpose();
+      bordered_.compute(a);
+      column_ = column;
+      row_ = row;
+    }
+    return bordered_.solve(b);
+  }
+
+ private:
+  MatrixX jacobian_;
+  Eigen::PartialPivLU<MatrixX> lu_;
+  bool factored_ = false;
+  Eigen::PartialPivLU<MatrixX> bordered_;
+  VectorX column_, row_;
+};
+
+/// GMRES on the matrix-free Jacobian (krylov.hpp); its iterations go to the solver's statistics.
+class KrylovLinearization final : public Linearization {
+ public:
+  KrylovLinearization(KrylovJacobian jacobian, VectorX d_omega, std::function<void(const GmresReport&)> record)
+      : jacobian_(std::move(jacobian)), record_(std::move(record)) {
+    d_omega_ = std::move(d_omega);
+  }
+  VectorX solve(const VectorX& b, double tolerance) override {
+    GmresReport report;
+    VectorX x = jacobian_.solve(b, tolerance, &report);
+    record_(report);
+    return x;
+  }
+  VectorX solve_bordered(const VectorX& column, const VectorX& row, const VectorX& b, double tolerance) override {
+    GmresReport report;
+    VectorX x = jacobian_.solve_bordered(column, row, b, tolerance, &report);
+    record_(report);
+    return x;
+  }
+
+ private:
+  KrylovJacobian jacobian_;
+  std::function<void(const GmresReport&)> record_;
+};
+
+}  // namespace
+
+std::unique_ptr<Linearization> HarmonicBalance::Impl::linearize(const std::vector<HarmonicReceptance>& rec,
+                                                                const VectorX& gaps, double factor) const {
+  VectorX d_omega;
+  if (!rec.empty() && rec[0].load_d.size() > 0) d_omega = -apply(rec, forces(gaps, factor), true) / scale;
+  if (!matrix_free) return std::make_unique<DenseLinearization>(jacobian(rec, gaps, factor), std::move(d_omega));
+  std::vector<ComplexVectorX> modal(H + 1);
+  for (int k = 0; k <= H; ++k) modal[k] = rec[k].modal;
+  ++krylov_factorisations;
+  return std::make_unique<KrylovLinearization>(
+      KrylovJacobian(system, H, std::move(modal), pair_derivatives(gaps, factor), options.krylov), std::move(d_omega),
+      [this](const GmresReport& report) { record(report); });
+}
+
+bool HarmonicBalance::matrix_free() const { return impl_->matrix_free; }
+
+std::unique_ptr<Linearization> HarmonicBalance::linearize(double omega, const VectorX& gaps, bool d_omega) const {
+  return impl_->linearize(impl_->receptances(omega, d_omega, !impl_->matrix_free), gaps, 1.0);
+}
+
+KrylovStatistics HarmonicBalance::krylov_statistics() const {
+  KrylovStatistics st;
+  st.solves = impl_->krylov_solves;
+  st.iterations = impl_->krylov_iterations;
+  st.max_iterations = impl_->krylov_max;
+  st.factorisations = impl_->krylov_factorisations;
+  st.unconverged = impl_->krylov_unconverged;
+  return st;
+}
+
+bool HarmonicBalance::selects_matrix_free(const HarmonicBalanceOptions& options, Index rows) {
+  if (options.solver != LinearSolver::automatic) return options.solver == LinearSolver::krylov;
+  return rows * (2 * options.harmonics + 1) > options.dense_limit;
+}
+
+double HarmonicBalance::memory_bytes(Index rows, Index modes, int harmonics, bool matrix_free, const KrylovOptions& krylov) {
+  const double c = static_cast<double>(rows), m = static_cast<double>(modes), nc = 2.0 * harmonics + 1.0;
+  const double n = c * nc;
+  const double samples = c * std::max(4096.0, 4.0 * harmonics);  // AFT time samples (c x N)
+  if (!matrix_free) {
+    // J, its LU and the bordered (n + 1) LU; complex c x c receptances and their Omega derivatives per harmonic
+    return 8.0 * (3.0 * n * n + 2.0 * samples) + 16.0 * 2.0 * (harmonics + 1.0) * c * c;
+  }
+  // dP/dG blocks, the closing rows' LU and coupling (<= c x c each), the Krylov basis and the vectors
+  return 8.0 * (c * nc * nc + 2.0 * c * c + (krylov.restart + 1.0 + 8.0) * n + 2.0 * samples + 4.0 * c * m);
+}
+
 Index HarmonicBalance::n_rows() const { return impl_->c; }
 int HarmonicBalance::n_harmonics() const { return impl_->H; }
 int HarmonicBalance::n_samples() const { return impl_->N; }
@@ -561,24 +725,24 @@ double HarmonicBalance::gap_scale() const { return impl_->scale; }
 const HarmonicBalanceOptions& HarmonicBalance::options() const { return impl_->options; }
 
 VectorX HarmonicBalance::linear_gaps(double omega) const {
-  return impl_->apply(impl_->receptances(omega, false), VectorX::Zero(n_unknowns()), false);
+  return impl_->apply(impl_->receptances(omega, false, !impl_->matrix_free), VectorX::Zero(n_unknowns()), false);
 }
 
 VectorX HarmonicBalance::pair_forces(const VectorX& gaps) const { return impl_->forces(gaps); }
 
 VectorX HarmonicBalance::residual(double omega, const VectorX& gaps) const {
-  return impl_->residual(impl_->receptances(omega, false), gaps);
+  return impl_->residual(impl_->receptances(omega, false, !impl_->matrix_free), gaps);
 }
 
 MatrixX HarmonicBalance::jacobian(double omega, const VectorX& gaps, VectorX* d_omega) const {
-  const auto rec = impl_->receptances(omega, d_omega != nullptr);
+  const auto rec = impl_->receptances(omega, d_omega != nullptr, true);
   if (d_omega) *d_omega = -impl_->apply(rec, impl_->forces(gaps), true) / impl_->scale;
   return impl_->jacobian(rec, gaps);
 }
 
 Solution HarmonicBalance::solve(double omega, const VectorX& guess) const {
   const Impl& d = *impl_;
-  const auto rec = d.receptances(omega, false);
+  const auto rec = d.receptances(omega, false, !d.matrix_free);
   Solution sol;
   sol.omega = omega;
   sol.subharmonic = d.nu;

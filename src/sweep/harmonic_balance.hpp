@@ -34,14 +34,27 @@
 
 #include "core/types.hpp"
 #include "reduced/system.hpp"
+#include "sweep/krylov.hpp"
 
 namespace crackle::sweep {
 
 using ComplexVectorX = Eigen::VectorXcd;
 using ComplexMatrixX = Eigen::MatrixXcd;
 
+/// How the Newton and continuation steps solve with the Jacobian J = I - H dP/dG.
+enum class LinearSolver {
+  automatic,  ///< dense up to HarmonicBalanceOptions::dense_limit unknowns, else krylov
+  dense,      ///< J formed (c(2H+1) square) and LU-factorised: fastest for small problems
+  krylov,     ///< matrix-free GMRES with the mean-stiffness preconditioner (krylov.hpp): no square matrix
+};
+
 /// Options of the harmonic-balance solver.
 struct HarmonicBalanceOptions {
+  LinearSolver solver = LinearSolver::automatic;
+  /// automatic: the dense solver up to this many unknowns c(2H+1). Measured crossover (docs/benchmarks.md
+  /// 9.1): below it the dense LU is as fast, above it GMRES wins and its cost grows about as c^2.
+  Index dense_limit = 1500;
+  KrylovOptions krylov;
   int harmonics = 10;        ///< H: harmonics 0..H of the base frequency Omega/nu
   int subharmonic = 1;       ///< nu: 1, or 2 for period-doubled branches
   int time_samples = 0;      ///< N samples per period for AFT; 0 = smallest power of two >= max(4H, 4096)
@@ -100,6 +113,23 @@ struct Stability {
   ComplexMatrixX critical_mode;
 };
 
+/// The linearisation of the scaled residual at one point: J = dr/dG s (= I - H dP/dG) and dr/dOmega,
+/// with the solves Newton and the continuation need. Dense (LU, reused while the bordering is the
+/// same) or matrix-free (GMRES, krylov.hpp) as HarmonicBalance::matrix_free() says.
+class Linearization {
+ public:
+  virtual ~Linearization() = default;
+  /// dr/dOmega [1/(rad/s)], empty unless asked for.
+  const VectorX& d_omega() const { return d_omega_; }
+  /// Solves J x = b; `tolerance` is the relative residual an iterative solve stops at.
+  virtual VectorX solve(const VectorX& b, double tolerance) = 0;
+  /// Solves [J column; row^T] x = b (n + 1 unknowns; `row` has n + 1 entries).
+  virtual VectorX solve_bordered(const VectorX& column, const VectorX& row, const VectorX& b, double tolerance) = 0;
+
+ protected:
+  VectorX d_omega_;
+};
+
 /// Harmonic balance of a reduced system. Borrows the system: it must outlive this object. The
 /// constructor makes the FFTW plans (FFTW's planner is not thread-safe: construct from one thread);
 /// the const members may then run concurrently.
@@ -129,6 +159,21 @@ class HarmonicBalance {
   VectorX residual(double omega, const VectorX& gaps) const;
   /// Jacobian dr/dG * s (dimensionless, = I - H dP/dG) and, if `d_omega` is not null, dr/dOmega.
   MatrixX jacobian(double omega, const VectorX& gaps, VectorX* d_omega = nullptr) const;
+
+  /// Whether the solves are matrix-free (LinearSolver::krylov, or automatic above dense_limit).
+  bool matrix_free() const;
+  /// The linearisation at (Omega, G [m]), with dr/dOmega when `d_omega`. Matrix-free, it never forms
+  /// the c(2H+1) square Jacobian (jacobian() does: use it on small problems only).
+  std::unique_ptr<Linearization> linearize(double omega, const VectorX& gaps, bool d_omega) const;
+  /// GMRES statistics summed over this solver's linearisations so far (zeros when dense).
+  KrylovStatistics krylov_statistics() const;
+  /// Bytes the solver needs at least for c pair rows, m modes and H harmonics, dense or
+  /// matrix-free (the Jacobian and its factor or the Krylov basis and the preconditioner's factor,
+  /// the receptances and the AFT samples).
+  static double memory_bytes(Index rows, Index modes, int harmonics, bool matrix_free,
+                             const KrylovOptions& krylov = KrylovOptions());
+  /// Whether the options select the matrix-free solver for c pair rows.
+  static bool selects_matrix_free(const HarmonicBalanceOptions& options, Index rows);
 
   /// Harmonics of the pair forces P(G) by AFT (same layout as the gaps) [N].
   VectorX pair_forces(const VectorX& gaps) const;

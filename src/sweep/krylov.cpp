@@ -1,0 +1,225 @@
+#include "sweep/krylov.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace crackle::sweep {
+
+namespace {
+using Complex = std::complex<double>;
+
+/// Complex harmonic k (k >= 1) of column pair (2k-1, 2k) of a c x (2H+1) real layout: a - i b.
+Eigen::VectorXcd harmonic(const MatrixX& x, int k) {
+  if (k == 0) return x.col(0).cast<Complex>();
+  return x.col(2 * k - 1).cast<Complex>() - Complex(0.0, 1.0) * x.col(2 * k).cast<Complex>();
+}
+void set_harmonic(MatrixX& x, int k, const Eigen::VectorXcd& value) {
+  if (k == 0) {
+    x.col(0) = value.real();
+    return;
+  }
+  x.col(2 * k - 1) = value.real();
+  x.col(2 * k) = -value.imag();
+}
+}  // namespace
+
+GmresReport gmres(const LinearAction& apply, const LinearAction& precondition, const VectorX& b, VectorX& x,
+                  double tolerance, int max_iterations, int restart) {
+  const Index n = b.size();
+  GmresReport report;
+  if (x.size() != n) x = VectorX::Zero(n);
+  const double b_norm = b.norm();
+  if (b_norm == 0.0) {
+    x.setZero();
+    report.converged = true;
+    return report;
+  }
+  restart = static_cast<int>(std::max<Index>(1, std::min<Index>(restart, n)));
+  MatrixX basis(n, restart + 1);
+  MatrixX hessenberg = MatrixX::Zero(restart + 1, restart);
+  VectorX cs(restart), sn(restart), g(restart + 1);
+  VectorX w(n), z(n);
+  while (true) {
+    apply(x, w);
+    w = b - w;
+    const double beta = w.norm();
+    report.relative_residual = beta / b_norm;
+    if (report.relative_residual <= tolerance) {
+      report.converged = true;
+      return report;
+    }
+    if (report.iterations >= max_iterations || !std::isfinite(beta)) return report;
+    basis.col(0) = w / beta;
+    hessenberg.setZero();
+    g.setZero();
+    g[0] = beta;
+    int j = 0;
+    for (; j < restart && report.iterations < max_iterations; ++j) {
+      precondition(basis.col(j), z);
+      apply(z, w);
+      // classical Gram-Schmidt twice (matrix-vector products, as stable as modified Gram-Schmidt)
+      for (int pass = 0; pass < 2; ++pass) {
+        const VectorX h = basis.leftCols(j + 1).transpose() * w;
+        w.noalias() -= basis.leftCols(j + 1) * h;
+        hessenberg.col(j).head(j + 1) += h;
+      }
+      const double h_next = w.norm();
+      hessenberg(j + 1, j) = h_next;
+      if (h_next > 0.0) basis.col(j + 1) = w / h_next;
+      for (int i = 0; i < j; ++i) {  // the previous rotations on the new column
+        const double a = hessenberg(i, j), c = hessenberg(i + 1, j);
+        hessenberg(i, j) = cs[i] * a + sn[i] * c;
+        hessenberg(i + 1, j) = -sn[i] * a + cs[i] * c;
+      }
+      const double a = hessenberg(j, j), c = hessenberg(j + 1, j);
+      const double r = std::hypot(a, c);
+      cs[j] = r > 0.0 ? a / r : 1.0;
+      sn[j] = r > 0.0 ? c / r : 0.0;
+      hessenberg(j, j) = r;
+      hessenberg(j + 1, j) = 0.0;
+      g[j + 1] = -sn[j] * g[j];
+      g[j] = cs[j] * g[j];
+      ++report.iterations;
+      if (std::abs(g[j + 1]) <= tolerance * b_norm || h_next == 0.0) {
+        ++j;
+        break;
+      }
+    }
+    const VectorX y =
+        hessenberg.topLeftCorner(j, j).triangularView<Eigen::Upper>().solve(g.head(j));
+    precondition(basis.leftCols(j) * y, z);
+    x += z;
+  }
+}
+
+double inexact_forcing(double norm, double tolerance) {
+  if (!(norm > 0.0)) return 0.5;
+  return std::clamp(std::max(std::min(1e-2, norm), 0.5 * tolerance / norm), 1e-14, 0.5);
+}
+
+void apply_receptance(const reduced::ReducedSystem& system, const std::vector<Eigen::VectorXcd>& modal,
+                      const VectorX& p, VectorX& g, bool residual) {
+  const Index c = system.n_rows();
+  const int H = static_cast<int>(modal.size()) - 1;
+  const Eigen::Map<const MatrixX> forces(p.data(), c, 2 * H + 1);
+  // R is real: it acts on the cos and sin columns alike (one product for all harmonics)
+  MatrixX gaps = residual ? MatrixX(system.residual * forces) : MatrixX::Zero(c, 2 * H + 1);
+  const MatrixX projected = system.pair_modes.transpose() * forces;  // U^T P, m x (2H+1)
+  MatrixX scaled(projected.rows(), projected.cols());
+  for (int k = 0; k <= H; ++k) {
+    Eigen::VectorXcd q = modal[k].cwiseProduct(harmonic(projected, k));
+    if (k == 0) q = q.real().cast<Complex>();  // the mean: the static (real) receptance
+    set_harmonic(scaled, k, q);
+  }
+  gaps.noalias() += system.pair_modes * scaled;
+  g = Eigen::Map<const VectorX>(gaps.data(), gaps.size());
+}
+
+KrylovJacobian::KrylovJacobian(const reduced::ReducedSystem& system, int harmonics, std::vector<Eigen::VectorXcd> modal,
+                               std::vector<PairDerivative> derivatives, const KrylovOptions& options)
+    : system_(system), c_(system.n_rows()), m_(system.n_modes()), H_(harmonics), options_(options),
+      modal_(std::move(modal)), derivatives_(std::move(derivatives)) {
+  mean_stiffness_ = VectorX::Zero(c_);
+  for (const PairDerivative& d : derivatives_)
+    for (int local = 0; local < d.rows; ++local) mean_stiffness_[d.first + local] = d.block(local, local);
+  for (Index i = 0; i < c_; ++i)
+    if (mean_stiffness_[i] != 0.0) active_.push_back(i);
+  const Index na = closing_rows();
+  coupling_.resize(c_, na);
+  for (Index a = 0; a < na; ++a) coupling_.col(a) = system.residual.col(active_[a]) * mean_stiffness_[active_[a]];
+  MatrixX closed = MatrixX::Identity(na, na);
+  for (Index a = 0; a < na; ++a)
+    for (Index b = 0; b < na; ++b) closed(a, b) -= coupling_(active_[a], b);
+  if (na > 0) closed_.compute(closed);
+  ku_ = mean_stiffness_.asDiagonal() * system.pair_modes;
+  y_ = solve_mean(system.pair_modes);
+  const MatrixX s = ku_.transpose() * y_;
+  woodbury_.resize(H_ + 1);
+  for (int k = 0; k <= H_; ++k) {
+    Eigen::MatrixXcd a = Eigen::MatrixXcd::Identity(m_, m_) - s.cast<Complex>() * modal_[k].asDiagonal();
+    woodbury_[k].compute(a);
+  }
+}
+
+MatrixX KrylovJacobian::solve_mean(const MatrixX& b) const {
+  const Index na = closing_rows();
+  if (na == 0) return b;
+  MatrixX rhs(na, b.cols());
+  for (Index a = 0; a < na; ++a) rhs.row(a) = b.row(active_[a]);
+  const MatrixX za = closed_.solve(rhs);
+  MatrixX z = b;
+  z.noalias() += coupling_ * za;  // open rows: z_i = b_i + R_ia K_a z_a
+  for (Index a = 0; a < na; ++a) z.row(active_[a]) = za.row(a);
+  return z;
+}
+
+void KrylovJacobian::apply(const VectorX& x, VectorX& y) const {
+  const int nc = 2 * H_ + 1;
+  VectorX p = VectorX::Zero(size());
+  VectorX local, out;
+  for (const PairDerivative& d : derivatives_) {
+    local.resize(static_cast<Index>(d.rows) * nc);
+    for (int hc = 0; hc < nc; ++hc)
+      for (int l = 0; l < d.rows; ++l) local[hc * d.rows + l] = x[hc * c_ + d.first + l];
+    out.noalias() = d.block * local;
+    for (int hc = 0; hc < nc; ++hc)
+      for (int l = 0; l < d.rows; ++l) p[hc * c_ + d.first + l] = out[hc * d.rows + l];
+  }
+  VectorX g;
+  apply_receptance(system_, modal_, p, g);
+  y = x - g;
+}
+
+void KrylovJacobian::precondition(const VectorX& x, VectorX& y) const {
+  const int nc = 2 * H_ + 1;
+  const MatrixX z = solve_mean(Eigen::Map<const MatrixX>(x.data(), c_, nc));
+  const MatrixX t = ku_.transpose() * z;  // (K U)^T z, m x (2H+1)
+  MatrixX v(m_, nc);
+  for (int k = 0; k <= H_; ++k) {
+    Eigen::VectorXcd q = modal_[k].cwiseProduct(woodbury_[k].solve(harmonic(t, k)));
+    if (k == 0) q = q.real().cast<Complex>();
+    set_harmonic(v, k, q);
+  }
+  MatrixX out = z;
+  out.noalias() += y_ * v;
+  y = Eigen::Map<const VectorX>(out.data(), out.size());
+}
+
+VectorX KrylovJacobian::solve(const VectorX& b, double tolerance, GmresReport* report) const {
+  VectorX x;
+  const GmresReport r = gmres([this](const VectorX& in, VectorX& out) { apply(in, out); },
+                              [this](const VectorX& in, VectorX& out) { precondition(in, out); }, b, x, tolerance,
+                              options_.max_iterations, options_.restart);
+  if (report) *report = r;
+  return x;
+}
+
+VectorX KrylovJacobian::solve_bordered(const VectorX& column, const VectorX& row, const VectorX& b, double tolerance,
+                                       GmresReport* report) const {
+  const Index n = size();
+  VectorX z2;
+  precondition(column, z2);
+  const double corner = row[n] - row.head(n).dot(z2);
+  auto action = [&](const VectorX& in, VectorX& out) {
+    VectorX top;
+    apply(in.head(n), top);
+    out.resize(n + 1);
+    out.head(n) = top + column * in[n];
+    out[n] = row.dot(in);
+  };
+  // the bordered preconditioner [M column; row^T] by the bordering lemma
+  auto bordered = [&](const VectorX& in, VectorX& out) {
+    VectorX z1;
+    precondition(in.head(n), z1);
+    const double last = (in[n] - row.head(n).dot(z1)) / corner;
+    out.resize(n + 1);
+    out.head(n) = z1 - last * z2;
+    out[n] = last;
+  };
+  VectorX x;
+  const GmresReport r = gmres(action, bordered, b, x, tolerance, options_.max_iterations, options_.restart);
+  if (report) *report = r;
+  return x;
+}
+
+}  // namespace crackle::sweep
