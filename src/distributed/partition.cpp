@@ -152,13 +152,15 @@ void agree(std::exception_ptr error) {
 PartitionBalance MeshPartition::balance() const {
   const HaloCounts counts = halo_counts();
   const std::vector<double> mine{static_cast<double>(local_.n_elements()), static_cast<double>(counts.owned_dofs),
-                                 static_cast<double>(counts.ghost_dofs), counts.bytes_per_step};
+                                 static_cast<double>(counts.ghost_dofs), counts.bytes_per_step,
+                                 static_cast<double>(counts.boundary_elements)};
+  const int n = static_cast<int>(mine.size());
   std::vector<double> low(mine.size()), high(mine.size()), total(mine.size());
-  MPI_Allreduce(mine.data(), low.data(), 4, MPI_DOUBLE, MPI_MIN, PETSC_COMM_WORLD);
-  MPI_Allreduce(mine.data(), high.data(), 4, MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);
-  MPI_Allreduce(mine.data(), total.data(), 4, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  MPI_Allreduce(mine.data(), low.data(), n, MPI_DOUBLE, MPI_MIN, PETSC_COMM_WORLD);
+  MPI_Allreduce(mine.data(), high.data(), n, MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);
+  MPI_Allreduce(mine.data(), total.data(), n, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
   const auto spread = [&](int k) { return Spread{low[k], high[k], total[k] / ranks_}; };
-  return {spread(0), spread(1), spread(2), spread(3)};
+  return {spread(0), spread(1), spread(2), spread(3), spread(4)};
 }
 
 MeshPartition::MeshPartition(const mesh::Mesh& global, std::vector<int> element_rank)

@@ -78,6 +78,7 @@ struct Spread {
 struct PartitionBalance {
   Spread elements, owned_dofs, ghost_dofs;
   Spread halo_bytes_per_step;  ///< HaloCounts::bytes_per_step
+  Spread boundary_elements;    ///< HaloCounts::boundary_elements
 };
 
 /// This rank's share of a mesh partition, and the transient::Distribution of a run over it.
