@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <array>
+
 #include "core/errors.hpp"
 #include "fem/assembly.hpp"
 #include "fem/material.hpp"
@@ -121,6 +123,25 @@ TEST(ElasticOperator, ElementRangesBetweenCutsSumToTheWholeProduct) {
       EXPECT_EQ((in_turn - whole).cwiseAbs().maxCoeff(), 0.0) << "brick " << brick << " order " << order;
     }
   }
+  // Above 20000 DOFs on 2 threads: each range runs colour by colour over its own chunks.
+  mesh::BoxSpec box;
+  box.cells = {30, 30, 10};
+  const mesh::Mesh mesh = mesh::build_box_mesh(box);
+  const mesh::DofMap dofs = mesh::make_dof_map(mesh, mesh::Variant::open);
+  ElasticOperatorOptions options;
+  options.chunk_elements = 256;
+  options.element_cuts = {1000, 5000};
+  const ElasticOperator op(mesh, dofs, materials, options);
+  ASSERT_GE(dofs.n_dofs(), 20000);
+  EXPECT_GT(op.info().n_colours, 1);
+  omp_set_num_threads(2);
+  const VectorX x = VectorX::Random(dofs.n_dofs());
+  VectorX whole, in_turn = VectorX::Zero(dofs.n_dofs());
+  op.apply(x, whole);
+  for (const auto& range : {std::array<Index, 2>{0, 1000}, {1000, 5000}, {5000, 9000}})
+    op.apply_add_elements(1.0, x, in_turn, range[0], range[1]);
+  EXPECT_LE((in_turn - whole).cwiseAbs().maxCoeff(), 1e-13 * whole.cwiseAbs().maxCoeff());
+  omp_set_num_threads(1);
 }
 
 TEST(ElasticOperator, GeneralKernelEqualsAssembledStiffness) {
