@@ -2,8 +2,12 @@
 /// box meshes with a crack in contact (a quarter of the mid plane), the partition's balance, the
 /// halo traffic per step (from the ghost counts) and the memory per rank. Run under mpirun:
 ///   mpirun -np R bench_distributed [--orders 1,2] [--elements 1e4,1e5] [--steps 200] [--serial]
+///                                  [--overlap on,off]
 /// (OMP_NUM_THREADS threads per rank). --serial also times the one-process solver (no
-/// distribution) on rank 0 alone, for the cost of the distributed path at one rank.
+/// distribution) on rank 0 alone, for the cost of the distributed path at one rank. --overlap:
+/// the halo overlapped with the interior elements (on), after all elements (off), or both in turn
+/// on the same partition (the default); the elements per rank split into boundary (touching a DOF
+/// another rank holds) and interior.
 /// One line per case on stdout from rank 0.
 #include <omp.h>
 #include <petscsys.h>
@@ -60,9 +64,11 @@ Case make_case(int order, int n) {
 /// Runs `steps` steps; returns the summary of this rank and, with a partition, the wall time of the
 /// steps spent in its halo and reductions.
 transient::TransientSummary run(const mesh::Mesh& mesh, transient::TransientProblem problem, double steps,
-                                const distributed::MeshPartition* partition = nullptr, double* communication = nullptr) {
+                                const distributed::MeshPartition* partition = nullptr, double* communication = nullptr,
+                                bool overlap = true) {
   transient::TransientOptions options;
   options.progress = false;
+  options.overlap_halo = overlap;
   options.end_time = 1e-12;
   const double dt = transient::TransientSolver(mesh, problem, options).dt();
   options.time_step = dt;
@@ -80,6 +86,7 @@ int main(int argc, char** argv) {
   std::vector<double> orders = {1, 2}, elements = {1e4};
   double steps = 200;
   bool serial = false;
+  std::vector<bool> overlaps = {true, false};
   std::vector<char*> petsc_arguments{argv[0]};
   for (int k = 1; k < argc; ++k) {
     const std::string flag = argv[k];
@@ -88,8 +95,14 @@ int main(int argc, char** argv) {
     else if (flag == "--elements") elements = parse_list(value), ++k;
     else if (flag == "--steps") steps = std::stod(value), ++k;
     else if (flag == "--serial") serial = true;
-    else {
-      std::fprintf(stderr, "usage: %s [--orders 1,2] [--elements 1e4,1e5] [--steps n] [--serial]\n", argv[0]);
+    else if (flag == "--overlap" && (value == "on" || value == "off" || value == "on,off" || value == "off,on")) {
+      overlaps.clear();
+      std::stringstream list(value);
+      for (std::string item; std::getline(list, item, ',');) overlaps.push_back(item == "on");
+      ++k;
+    } else {
+      std::fprintf(stderr, "usage: %s [--orders 1,2] [--elements 1e4,1e5] [--steps n] [--serial] [--overlap on,off]\n",
+                   argv[0]);
       return 2;
     }
   }
@@ -98,9 +111,9 @@ int main(int argc, char** argv) {
   if (PetscInitialize(&petsc_argc, &petsc_argv, nullptr, nullptr) != 0) return 1;
   const int rank = distributed::world_rank(), ranks = distributed::world_size();
   if (rank == 0) {
-    std::printf("%-3s %-9s %-10s %-5s %-7s %-6s %-12s %-16s %-11s %-14s %-12s %-12s %-8s\n", "p", "elements", "dofs", "ranks",
-                "threads", "steps", "ns/dof-step", "elements/rank", "ghost dofs", "halo B/step", "RSS/rank MB",
-                "1-proc ns", "comm %");
+    std::printf("%-3s %-9s %-10s %-5s %-7s %-6s %-8s %-12s %-16s %-16s %-11s %-14s %-12s %-12s %-8s\n", "p", "elements",
+                "dofs", "ranks", "threads", "steps", "overlap", "ns/dof-step", "elements/rank", "boundary/rank",
+                "ghost dofs", "halo B/step", "RSS/rank MB", "1-proc ns", "comm %");
   }
   for (double order_value : orders) {
     const int order = static_cast<int>(order_value);
@@ -125,23 +138,36 @@ int main(int argc, char** argv) {
       problem.initial.velocity = partition.local_field(c.velocity);
       problem.terms.push_back(partition.local_contact(c.materials, contact::ContactOptions{}));
       problem.distribution = std::shared_ptr<const transient::Distribution>(&partition, [](const auto*) {});
-      double communication = 0.0;  // of the steps, in the halo and the reductions (waits included)
-      const transient::TransientSummary summary = run(partition.local_mesh(), problem, steps, &partition, &communication);
-      communication = max_over_ranks(communication);
       const distributed::HaloCounts halo = partition.halo_counts();
+      const auto range_over_ranks = [](double value) {
+        double low = value, high = value;
+        MPI_Allreduce(MPI_IN_PLACE, &low, 1, MPI_DOUBLE, MPI_MIN, PETSC_COMM_WORLD);
+        MPI_Allreduce(MPI_IN_PLACE, &high, 1, MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);
+        char text[64];
+        std::snprintf(text, sizeof text, "%.0f..%.0f", low, high);
+        return std::string(text);
+      };
+      const std::string boundary = range_over_ranks(static_cast<double>(halo.boundary_elements));
       const double ghosts = max_over_ranks(static_cast<double>(halo.ghost_dofs));
       const double bytes = max_over_ranks(halo.bytes_per_step);
-      const double rss = max_over_ranks(static_cast<double>(peak_rss_bytes())) / 1e6;
-      const double ns = max_over_ranks(summary.ns_per_dof_step);
-      if (rank == 0) {
-        char balance[64];
-        std::snprintf(balance, sizeof balance, "%lld..%lld", static_cast<long long>(summary.elements_min),
-                      static_cast<long long>(summary.elements_max));
-        std::printf("%-3d %-9lld %-10lld %-5d %-7d %-6lld %-12.2f %-16s %-11.0f %-14.0f %-12.0f %-12.2f %-8.1f\n", order,
-                    static_cast<long long>(summary.n_elements), static_cast<long long>(summary.n_dofs), ranks,
-                    omp_get_max_threads(), static_cast<long long>(summary.steps), ns, balance, ghosts, bytes, rss,
-                    serial_ns, 100.0 * communication / std::max(summary.wall_s, 1e-12));
-        std::fflush(stdout);
+      for (bool overlap : overlaps) {
+        double communication = 0.0;  // of the steps, in the halo and the reductions (waits included)
+        const transient::TransientSummary summary =
+            run(partition.local_mesh(), problem, steps, &partition, &communication, overlap);
+        communication = max_over_ranks(communication);
+        const double rss = max_over_ranks(static_cast<double>(peak_rss_bytes())) / 1e6;
+        const double ns = max_over_ranks(summary.ns_per_dof_step);
+        if (rank == 0) {
+          char balance[64];
+          std::snprintf(balance, sizeof balance, "%lld..%lld", static_cast<long long>(summary.elements_min),
+                        static_cast<long long>(summary.elements_max));
+          std::printf("%-3d %-9lld %-10lld %-5d %-7d %-6lld %-8s %-12.2f %-16s %-16s %-11.0f %-14.0f %-12.0f %-12.2f %-8.1f\n",
+                      order, static_cast<long long>(summary.n_elements), static_cast<long long>(summary.n_dofs), ranks,
+                      omp_get_max_threads(), static_cast<long long>(summary.steps),
+                      summary.halo_overlapped ? "on" : "off", ns, balance, boundary.c_str(), ghosts, bytes, rss,
+                      serial_ns, 100.0 * communication / std::max(summary.wall_s, 1e-12));
+          std::fflush(stdout);
+        }
       }
     }
   }

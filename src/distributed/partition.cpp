@@ -3,6 +3,7 @@
 #include <petscmat.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cstring>
 #include <new>
 #include <string>
@@ -151,13 +152,15 @@ void agree(std::exception_ptr error) {
 PartitionBalance MeshPartition::balance() const {
   const HaloCounts counts = halo_counts();
   const std::vector<double> mine{static_cast<double>(local_.n_elements()), static_cast<double>(counts.owned_dofs),
-                                 static_cast<double>(counts.ghost_dofs), counts.bytes_per_step};
+                                 static_cast<double>(counts.ghost_dofs), counts.bytes_per_step,
+                                 static_cast<double>(counts.boundary_elements)};
+  const int n = static_cast<int>(mine.size());
   std::vector<double> low(mine.size()), high(mine.size()), total(mine.size());
-  MPI_Allreduce(mine.data(), low.data(), 4, MPI_DOUBLE, MPI_MIN, PETSC_COMM_WORLD);
-  MPI_Allreduce(mine.data(), high.data(), 4, MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);
-  MPI_Allreduce(mine.data(), total.data(), 4, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  MPI_Allreduce(mine.data(), low.data(), n, MPI_DOUBLE, MPI_MIN, PETSC_COMM_WORLD);
+  MPI_Allreduce(mine.data(), high.data(), n, MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);
+  MPI_Allreduce(mine.data(), total.data(), n, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
   const auto spread = [&](int k) { return Spread{low[k], high[k], total[k] / ranks_}; };
-  return {spread(0), spread(1), spread(2), spread(3)};
+  return {spread(0), spread(1), spread(2), spread(3), spread(4)};
 }
 
 MeshPartition::MeshPartition(const mesh::Mesh& global, std::vector<int> element_rank)
@@ -213,6 +216,31 @@ MeshPartition::MeshPartition(const mesh::Mesh& global, std::vector<int> element_
   for (Index node : global_nodes_)
     for (int c = 0; c < 3; ++c) global_dofs_.push_back(3 * node + c);
 
+  // Boundary elements (touching a node that another rank holds: a ghost, or an owned node that
+  // another rank's elements or crack pairs reach) first, then the interior; each in global order.
+  std::vector<char> touched_elsewhere(n_nodes, 0);
+  for (Index e = 0; e < n_elements; ++e)
+    if (element_rank_[e] != rank_)
+      for (int a = 0; a < npe; ++a) touched_elsewhere[global.element_nodes(e)[a]] = 1;
+  std::vector<char> shared(n_nodes, 0);
+  for (Index i = 0; i < n_nodes; ++i) shared[i] = held[i] && (owner[i] != rank_ || touched_elsewhere[i]);
+  for (const mesh::CrackPair& pair : global.crack_pairs) {
+    if (touched_elsewhere[pair.minus] || touched_elsewhere[pair.plus]) {
+      shared[pair.minus] = held[pair.minus];
+      shared[pair.plus] = held[pair.plus];
+    }
+  }
+  std::vector<Index> own_elements;
+  for (int pass = 0; pass < 2; ++pass) {
+    for (Index e = 0; e < n_elements; ++e) {
+      if (element_rank_[e] != rank_) continue;
+      bool boundary = false;
+      for (int a = 0; a < npe && !boundary; ++a) boundary = shared[global.element_nodes(e)[a]] != 0;
+      if (boundary == (pass == 0)) own_elements.push_back(e);
+    }
+    if (pass == 0) n_boundary_elements_ = static_cast<Index>(own_elements.size());
+  }
+
   // The local mesh.
   local_.shape = global.shape;
   local_.order = global.order;
@@ -221,8 +249,7 @@ MeshPartition::MeshPartition(const mesh::Mesh& global, std::vector<int> element_
   for (Index node : global_nodes_) local_.nodes.push_back(global.nodes[node]);
   local_.n_original_nodes = local_.n_nodes();
   std::vector<Index> local_element(n_elements, -1);
-  for (Index e = 0; e < n_elements; ++e) {
-    if (element_rank_[e] != rank_) continue;
+  for (Index e : own_elements) {
     local_element[e] = static_cast<Index>(local_.element_region.size());
     for (int a = 0; a < npe; ++a) local_.connectivity.push_back(local_of_[global.element_nodes(e)[a]]);
     local_.element_region.push_back(global.element_region[e]);
@@ -274,6 +301,16 @@ MeshPartition::MeshPartition(const mesh::Mesh& global, std::vector<int> element_
   }
   check(VecRestoreArray(form, &array), "VecRestoreArray");
   check(VecGhostRestoreLocalForm(halo_, &form), "VecGhostRestoreLocalForm");
+#ifndef NDEBUG
+  // The interior touches no DOF another rank holds (what the overlapped halo relies on).
+  std::vector<char> boundary_node(local_.n_nodes(), 0);
+  for (Index k : boundary_) boundary_node[k / 3] = 1;
+  for (Index e = n_boundary_elements_; e < local_.n_elements(); ++e)
+    for (int a = 0; a < npe; ++a) {
+      const Index node = local_.element_nodes(e)[a];
+      assert(node < n_owned_nodes_ && !boundary_node[node]);
+    }
+#endif
 }
 
 MeshPartition::~MeshPartition() {
@@ -290,14 +327,23 @@ HaloCounts MeshPartition::halo_counts() const {
   counts.owned_dofs = 3 * n_owned_nodes_;
   counts.ghost_dofs = 3 * (static_cast<Index>(global_nodes_.size()) - n_owned_nodes_);
   counts.boundary_dofs = static_cast<Index>(boundary_.size());
+  counts.boundary_elements = n_boundary_elements_;
+  counts.interior_elements = local_.n_elements() - n_boundary_elements_;
   counts.bytes_per_step = 2.0 * 8.0 * static_cast<double>(counts.ghost_dofs);
   return counts;
 }
 
 void MeshPartition::complete(VectorX& local) const {
-  // Only the ghosts and the owned entries that are ghosts elsewhere (the boundary) are copied: the
-  // PETSc Vec's owned part stays zero between calls, so the scatter-add leaves there the sum of the
-  // other ranks' shares.
+  send_shares(local);
+  receive_sums(local);
+  receive_ghosts(local);
+}
+
+// Only the ghosts and the owned entries that are ghosts elsewhere (the boundary) are copied: the
+// PETSc Vec's owned part stays zero between completions, so the scatter-add leaves there the sum of
+// the other ranks' shares.
+
+void MeshPartition::send_shares(VectorX& local) const {
   const Stopwatch watch;
   const Index n = static_cast<Index>(local.size()), owned = n_owned_dofs();
   if (n != static_cast<Index>(global_dofs_.size())) throw InputError("distributed transient: a local vector of the wrong size");
@@ -307,13 +353,32 @@ void MeshPartition::complete(VectorX& local) const {
   check(VecGetArray(form, &array), "VecGetArray");
   std::memcpy(array + owned, local.data() + owned, (n - owned) * sizeof(double));
   check(VecRestoreArray(form, &array), "VecRestoreArray");
+  check(VecGhostRestoreLocalForm(halo_, &form), "VecGhostRestoreLocalForm");
   check(VecGhostUpdateBegin(halo_, ADD_VALUES, SCATTER_REVERSE), "VecGhostUpdateBegin");
+  communication_seconds_ += watch.seconds();
+}
+
+void MeshPartition::receive_sums(VectorX& local) const {
+  const Stopwatch watch;
   check(VecGhostUpdateEnd(halo_, ADD_VALUES, SCATTER_REVERSE), "VecGhostUpdateEnd");
+  Vec form = nullptr;
+  PetscScalar* array = nullptr;
+  check(VecGhostGetLocalForm(halo_, &form), "VecGhostGetLocalForm");
   check(VecGetArray(form, &array), "VecGetArray");
   for (Index k : boundary_) array[k] = local[k] += array[k];
   check(VecRestoreArray(form, &array), "VecRestoreArray");
+  check(VecGhostRestoreLocalForm(halo_, &form), "VecGhostRestoreLocalForm");
   check(VecGhostUpdateBegin(halo_, INSERT_VALUES, SCATTER_FORWARD), "VecGhostUpdateBegin");
+  communication_seconds_ += watch.seconds();
+}
+
+void MeshPartition::receive_ghosts(VectorX& local) const {
+  const Stopwatch watch;
+  const Index n = static_cast<Index>(local.size()), owned = n_owned_dofs();
   check(VecGhostUpdateEnd(halo_, INSERT_VALUES, SCATTER_FORWARD), "VecGhostUpdateEnd");
+  Vec form = nullptr;
+  PetscScalar* array = nullptr;
+  check(VecGhostGetLocalForm(halo_, &form), "VecGhostGetLocalForm");
   check(VecGetArray(form, &array), "VecGetArray");
   std::memcpy(local.data() + owned, array + owned, (n - owned) * sizeof(double));
   for (Index k : boundary_) array[k] = 0.0;

@@ -6,7 +6,8 @@
 /// nodes, and every rank then integrates its owned and ghost DOFs from the same forces.
 ///
 /// First step: every rank still holds the whole mesh (replicated, built by each rank from the
-/// scene), and takes from it its local mesh: its elements in their global order, its owned nodes
+/// scene), and takes from it its local mesh: its elements (those touching a node another rank
+/// holds first, the interior after them, each in global order), its owned nodes
 /// (increasing global number) and then its ghost nodes. A node belongs to the lowest rank among the
 /// elements touching it, except the two nodes of a crack pair, which both belong to the owner of the
 /// plus node, so that a pair's contact is computed where both its nodes are owned; a rank whose
@@ -60,6 +61,9 @@ struct HaloCounts {
   Index owned_dofs = 0;
   Index ghost_dofs = 0;
   Index boundary_dofs = 0;  ///< owned DOFs that other ranks hold as ghosts
+  /// Elements touching a DOF that another rank holds (applied before the halo starts), and the
+  /// others (applied while it travels).
+  Index boundary_elements = 0, interior_elements = 0;
   /// Bytes this rank sends and receives per step: ghost DOFs x 8 bytes, twice (the scatter-add of
   /// the element shares, then the completed sums back to the ghosts).
   double bytes_per_step = 0.0;
@@ -74,6 +78,7 @@ struct Spread {
 struct PartitionBalance {
   Spread elements, owned_dofs, ghost_dofs;
   Spread halo_bytes_per_step;  ///< HaloCounts::bytes_per_step
+  Spread boundary_elements;    ///< HaloCounts::boundary_elements
 };
 
 /// This rank's share of a mesh partition, and the transient::Distribution of a run over it.
@@ -87,7 +92,7 @@ class MeshPartition final : public transient::Distribution {
   MeshPartition& operator=(const MeshPartition&) = delete;
 
   const mesh::Mesh& global_mesh() const { return *global_; }
-  /// Own elements, owned then ghost nodes; node sets, face sets and crack pairs restricted to them.
+  /// Own elements (boundary first, n_boundary_elements()), owned then ghost nodes; node sets, face sets and crack pairs restricted to them.
   const mesh::Mesh& local_mesh() const { return local_; }
   const std::vector<int>& element_rank() const { return element_rank_; }
   Index n_owned_nodes() const { return n_owned_nodes_; }
@@ -118,6 +123,10 @@ class MeshPartition final : public transient::Distribution {
   Index n_global_dofs() const override { return 3 * global_->n_nodes(); }
   const std::vector<Index>& global_dofs() const override { return global_dofs_; }
   void complete(VectorX& local) const override;
+  void send_shares(VectorX& local) const override;
+  void receive_sums(VectorX& local) const override;
+  void receive_ghosts(VectorX& local) const override;
+  Index n_boundary_elements() const override { return n_boundary_elements_; }
   void sum(std::vector<double>& values) const override;
   void agree(std::exception_ptr error) const override { distributed::agree(error); }
 
@@ -127,6 +136,7 @@ class MeshPartition final : public transient::Distribution {
   int rank_ = 0, ranks_ = 1;
   mesh::Mesh local_;
   Index n_owned_nodes_ = 0;
+  Index n_boundary_elements_ = 0;  ///< the first local elements: those touching a shared DOF
   std::vector<Index> global_nodes_, local_of_, global_dofs_;
   Vec halo_ = nullptr;  ///< ghosted: owned DOFs in the PETSc numbering, ghosts after them
   std::vector<Index> boundary_;  ///< owned local DOFs that other ranks hold as ghosts

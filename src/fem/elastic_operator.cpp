@@ -677,8 +677,21 @@ ElasticOperator::ElasticOperator(const mesh::Mesh& mesh, const mesh::DofMap& dof
     chunk = threads == 1 ? 4096 : (impl.n_elements + 16 * threads - 1) / (16 * threads);
     chunk = std::clamp<Index>((chunk + kLanes - 1) / kLanes * kLanes, 64, 4096);
   }
-  for (Index begin = 0; begin < impl.n_elements; begin += chunk) impl.chunk_begin.push_back(begin);
-  impl.chunk_begin.push_back(impl.n_elements);
+  {
+    // Chunks within each run of elements between cuts (no cut: one run, chunks from element 0).
+    std::vector<Index> runs{0};
+    for (Index cut : options.element_cuts) {
+      if (cut < runs.back() || cut > impl.n_elements) {
+        throw InputError("elastic operator: element cut " + std::to_string(cut) + " out of order or outside 0.." +
+                         std::to_string(impl.n_elements));
+      }
+      if (cut > runs.back() && cut < impl.n_elements) runs.push_back(cut);
+    }
+    runs.push_back(impl.n_elements);
+    for (std::size_t r = 0; r + 1 < runs.size(); ++r)
+      for (Index begin = runs[r]; begin < runs[r + 1]; begin += chunk) impl.chunk_begin.push_back(begin);
+    impl.chunk_begin.push_back(impl.n_elements);
+  }
   const Index n_chunks = static_cast<Index>(impl.chunk_begin.size()) - 1;
   {
     // DOF node -> chunks touching it (chunks visited in order, so each list is sorted).
@@ -865,7 +878,32 @@ void ElasticOperator::apply(const VectorX& x, VectorX& y) const {
   apply_add(1.0, x, y);
 }
 
+bool ElasticOperator::can_apply_elements(Index begin, Index end) const {
+  const Impl& impl = *impl_;
+  if (impl.matrix.rows() > 0 || begin < 0 || begin > end || end > impl.n_elements) return false;
+  const auto is_chunk_start = [&](Index element) {
+    return std::binary_search(impl.chunk_begin.begin(), impl.chunk_begin.end(), element);
+  };
+  return is_chunk_start(begin) && is_chunk_start(end);
+}
+
+void ElasticOperator::apply_add_elements(double scale, const VectorX& x, VectorX& y, Index begin, Index end) const {
+  if (!can_apply_elements(begin, end)) {
+    throw InputError("elastic operator (" + impl_->info.kernel + "): elements " + std::to_string(begin) + ".." +
+                     std::to_string(end) + " are not a range of whole chunks");
+  }
+  const auto chunk_of = [&](Index element) {
+    return static_cast<Index>(std::lower_bound(impl_->chunk_begin.begin(), impl_->chunk_begin.end(), element) -
+                              impl_->chunk_begin.begin());
+  };
+  apply_chunks(scale, x, y, chunk_of(begin), chunk_of(end));
+}
+
 void ElasticOperator::apply_add(double scale, const VectorX& x, VectorX& y) const {
+  apply_chunks(scale, x, y, 0, static_cast<Index>(impl_->chunk_begin.size()) - 1);
+}
+
+void ElasticOperator::apply_chunks(double scale, const VectorX& x, VectorX& y, Index first_chunk, Index end_chunk) const {
   const Impl& impl = *impl_;
   if (x.size() != impl.n_dofs || y.size() != impl.n_dofs) {
     throw InputError("elastic operator of " + std::to_string(impl.n_dofs) + " DOFs applied to vectors of " +
@@ -898,15 +936,19 @@ void ElasticOperator::apply_add(double scale, const VectorX& x, VectorX& y) cons
   // Small problems run on one thread: starting and synchronising threads would cost more.
   if (omp_get_max_threads() == 1 || n_chunks <= 1 || impl.n_dofs < kParallelMinimumDofs) {
     std::vector<double> scratch(scratch_size);
-    for (Index c = 0; c < n_chunks; ++c) run_chunk(c, scratch.data());
+    for (Index c = first_chunk; c < end_chunk; ++c) run_chunk(c, scratch.data());
     return;
   }
+  const bool all = first_chunk == 0 && end_chunk == n_chunks;
 #pragma omp parallel
   {
     std::vector<double> scratch(scratch_size);
     for (const std::vector<Index>& chunks : impl.colour_chunks) {
+      // A colour's chunks are in increasing order: those of the range are one run of them.
+      const std::size_t from = all ? 0 : std::lower_bound(chunks.begin(), chunks.end(), first_chunk) - chunks.begin();
+      const std::size_t to = all ? chunks.size() : std::lower_bound(chunks.begin(), chunks.end(), end_chunk) - chunks.begin();
 #pragma omp for schedule(dynamic, 1)
-      for (std::size_t k = 0; k < chunks.size(); ++k) run_chunk(chunks[k], scratch.data());
+      for (std::size_t k = from; k < to; ++k) run_chunk(chunks[k], scratch.data());
     }
   }
 }

@@ -24,9 +24,13 @@
 /// consecutive elements, and the chunks coloured so that no two chunks of a colour share a DOF
 /// node; one colour at a time, threads take whole chunks. With one thread the chunks run in
 /// element order; below 20000 DOFs an application always runs on one thread. Results are
-/// independent of the thread count up to summation order.
+/// independent of the thread count up to summation order. Chunks can be made to begin at given
+/// elements (ElasticOperatorOptions::element_cuts), and a range of whole chunks applied alone
+/// (apply_add_elements): a distributed run applies its boundary elements, starts the halo, then
+/// applies its interior ones.
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/types.hpp"
 #include "fem/assembly.hpp"
@@ -40,6 +44,9 @@ struct ElasticOperatorOptions {
   bool brick_kernel = true;
   /// Elements per chunk (the unit of work of a thread); 0 = automatic.
   Index chunk_elements = 0;
+  /// Elements at which a chunk must begin (ascending), so that the element ranges between them can
+  /// be applied alone (apply_add_elements): a distributed run's boundary and interior elements.
+  std::vector<Index> element_cuts;
 };
 
 /// What the operator chose, for logs and benchmarks.
@@ -75,7 +82,19 @@ class ElasticOperator final : public LinearOperator {
   /// y = K x.
   void apply(const VectorX& x, VectorX& y) const override;
 
+  /// True when the elements [begin, end) can be applied alone: a matrix-free kernel (the assembled
+  /// one of tetrahedra has no elements left) and chunks that begin at `begin` and at `end` (or end
+  /// there: end = n_elements); see ElasticOperatorOptions::element_cuts.
+  bool can_apply_elements(Index begin, Index end) const;
+  /// y += scale K_[begin, end) x: the share of the elements [begin, end) only (can_apply_elements;
+  /// InputError otherwise). The chunks run in the order of apply_add (one thread: element order;
+  /// threads: colour by colour), so the ranges of a split applied in turn give, on one thread,
+  /// bitwise the result of apply_add.
+  void apply_add_elements(double scale, const VectorX& x, VectorX& y, Index begin, Index end) const;
+
  private:
+  /// y += scale K x over the chunks [first_chunk, end_chunk).
+  void apply_chunks(double scale, const VectorX& x, VectorX& y, Index first_chunk, Index end_chunk) const;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

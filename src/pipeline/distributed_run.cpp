@@ -92,7 +92,8 @@ DistributedTransient distribute_transient(const Model& model, const transient::T
                         {"elements", spread_json(balance.elements)},
                         {"owned_dofs", spread_json(balance.owned_dofs)},
                         {"ghost_dofs", spread_json(balance.ghost_dofs)},
-                        {"halo_bytes_per_step", spread_json(balance.halo_bytes_per_step)}};
+                        {"halo_bytes_per_step", spread_json(balance.halo_bytes_per_step)},
+                        {"boundary_elements", spread_json(balance.boundary_elements)}};
   return run;
 }
 

@@ -26,6 +26,21 @@ class Distribution {
   /// Completes a local vector of element contributions: each owned entry becomes the sum over the
   /// ranks that touch it (one scatter-add), each ghost entry a copy of its owner's sum.
   virtual void complete(VectorX& local) const = 0;
+  /// complete() in three phases, so that element work can run while the messages travel (every
+  /// rank calls them in turn on the same vector, nothing else of the distribution in between):
+  /// send_shares() starts the scatter-add of the ghost entries (then complete: every element that
+  /// touches a ghost applied); receive_sums() ends it, each owned entry that another rank holds
+  /// becomes the sum (it must be complete here too: applied by every element of this rank that
+  /// touches it), and starts sending the sums back; receive_ghosts() ends that, each ghost entry
+  /// becomes its owner's sum. Entries that no other rank holds are neither read nor written.
+  virtual void send_shares(VectorX& local) const = 0;
+  virtual void receive_sums(VectorX& local) const = 0;
+  virtual void receive_ghosts(VectorX& local) const = 0;
+  /// The rank's elements (of its local mesh) are ordered boundary first: the first
+  /// n_boundary_elements() touch a DOF that another rank holds (a ghost, or an owned DOF that is a
+  /// ghost elsewhere); the rest, the interior, touch only DOFs no other rank holds, so that they
+  /// can be applied while the halo travels.
+  virtual Index n_boundary_elements() const = 0;
   /// Sums `values` over the ranks, in place (every rank gets the same sums).
   virtual void sum(std::vector<double>& values) const = 0;
   /// Collective: every rank passes its own error (null: none). When some rank failed, every rank

@@ -3,6 +3,7 @@
 /// contact module): stiffness-proportional damping -beta K U' and external loads f_hat a(t)
 /// (MODEL.md eqs. 25b, 26). The elastic force -K U is the integrator's own term (its dot products
 /// come from the fused step sums, see TransientSolver).
+#include "fem/elastic_operator.hpp"
 #include "fem/force_term.hpp"
 #include "fem/operator.hpp"
 #include "fem/system.hpp"
@@ -24,10 +25,23 @@ class StiffnessDamping final : public fem::ForceTerm {
   }
   double force_dot(const VectorX& x) const override { return force_.dot(x); }
 
+  /// The same force in parts over ranges of elements (a distributed run's overlapped halo, see
+  /// TransientSolver): clear_parts(), then add_part() for each range adds its share to `force`
+  /// and to the term's own force (for force_dot).
+  void clear_parts() { force_.setZero(); }
+  void add_part(const fem::ElasticOperator& stiffness, const fem::StepInput& input, VectorX& force, Index begin,
+                Index end) {
+    part_.setZero(force_.size());
+    stiffness.apply_add_elements(-beta_, input.velocity, part_, begin, end);
+    force += part_;
+    force_ += part_;
+  }
+
  private:
   const fem::LinearOperator& stiffness_;
   double beta_;
   VectorX force_;  ///< -beta K V(i-1/2) of the last step
+  VectorX part_;   ///< add_part's share
 };
 
 /// A load shape times a signal, eq. (25b).

@@ -41,6 +41,14 @@ class StableStepOperator final : public fem::LinearOperator {
   const Distribution* distribution_;
 };
 
+/// Where a distributed run's element kernels are cut: after the boundary elements, and in the
+/// middle of the interior (TransientSolver::Impl::add_force_overlapped). Set with or without
+/// overlap_halo, so that both apply the same chunks.
+std::vector<Index> elastic_cuts(const mesh::Mesh& mesh, const Distribution& distribution) {
+  const Index boundary = distribution.n_boundary_elements();
+  return {boundary, boundary + (mesh.n_elements() - boundary) / 2};
+}
+
 /// A term's dot products with U(i) and V(i-1/2) from its add_force, and its time.
 struct TermRecord {
   double dot_displacement = 0.0;
@@ -105,7 +113,17 @@ struct TransientSolver::Impl final : SecondOrderSystem {
   const VectorX& inverse_mass() const override { return inverse; }
   double mass_damping() const override { return options.damping.alpha; }
 
+  /// Distributed runs whose elements can be applied in ranges: the boundary elements
+  /// [0, boundary_end), then the interior [boundary_end, n) in two halves cut at interior_middle.
+  bool overlap = false;
+  Index boundary_end = 0, interior_middle = 0;
+  StiffnessDamping* damping_term = nullptr;  ///< terms[0] when beta > 0
+
   void add_force(const fem::StepInput& input, VectorX& force) override {
+    if (overlap) {
+      add_force_overlapped(input, force);
+      return;
+    }
     elastic->apply_add(-1.0, input.displacement, force);  // -K U, eq. (25a)
     for (std::size_t k = 0; k < terms.size(); ++k) {
       if (distribution && k == halo_before) distribution->complete(force);
@@ -116,6 +134,44 @@ struct TransientSolver::Impl final : SecondOrderSystem {
       records[k].seconds += watch.seconds();
     }
     if (distribution && halo_before == terms.size()) distribution->complete(force);
+  }
+
+  /// add_force with the halo overlapped: the element terms (-K U, -beta K V) over the boundary
+  /// elements and the loads, then the scatter-add of the ghost shares starts; the first half of
+  /// the interior while it travels, then the sums go back to the ghosts while the second half
+  /// runs (the interior touches no DOF another rank holds); then the pointwise terms.
+  void add_force_overlapped(const fem::StepInput& input, VectorX& force) {
+    const Index n_elements = elastic->info().n_elements;
+    const Index ranges[3][2] = {{0, boundary_end}, {boundary_end, interior_middle}, {interior_middle, n_elements}};
+    const auto apply_range = [&](int r) {
+      elastic->apply_add_elements(-1.0, input.displacement, force, ranges[r][0], ranges[r][1]);
+      if (damping_term) {
+        const Stopwatch watch;
+        damping_term->add_part(*elastic, input, force, ranges[r][0], ranges[r][1]);
+        records[0].seconds += watch.seconds();
+      }
+    };
+    if (damping_term) damping_term->clear_parts();
+    apply_range(0);
+    for (std::size_t k = damping_term ? 1 : 0; k < halo_before; ++k) add_term_force(k, input, force);
+    distribution->send_shares(force);
+    apply_range(1);
+    distribution->receive_sums(force);
+    apply_range(2);
+    distribution->receive_ghosts(force);
+    if (damping_term) {
+      records[0].dot_displacement = damping_term->force_dot(input.displacement);
+      records[0].dot_velocity = damping_term->force_dot(input.velocity);
+    }
+    for (std::size_t k = halo_before; k < terms.size(); ++k) add_term_force(k, input, force);
+  }
+
+  void add_term_force(std::size_t k, const fem::StepInput& input, VectorX& force) {
+    const Stopwatch watch;
+    terms[k]->add_force(input, force);
+    records[k].dot_displacement = terms[k]->force_dot(input.displacement);
+    records[k].dot_velocity = terms[k]->force_dot(input.velocity);
+    records[k].seconds += watch.seconds();
   }
 
   void warn(const std::string& text) {
@@ -162,7 +218,11 @@ void TransientSolver::Impl::check_options() const {
 }
 
 void TransientSolver::Impl::add_terms() {
-  if (options.damping.beta > 0.0) terms.push_back(std::make_shared<StiffnessDamping>(*elastic, options.damping.beta));
+  if (options.damping.beta > 0.0) {
+    auto damping = std::make_shared<StiffnessDamping>(*elastic, options.damping.beta);
+    damping_term = damping.get();
+    terms.push_back(std::move(damping));
+  }
   for (std::size_t k = 0; k < problem.loads.size(); ++k) {
     const ExternalLoad& load = problem.loads[k];
     const std::string where = "load '" + (load.name.empty() ? std::to_string(k) : load.name) + "'";
@@ -289,6 +349,19 @@ void TransientSolver::Impl::setup() {
   }
   add_terms();
   const mesh::Mesh& mesh = system->mesh();
+  if (distribution) {
+    // The overlapped halo needs the elements in ranges: a matrix-free kernel (tetrahedra's
+    // assembled K is applied row by row, not by element, so they complete after all elements)
+    // whose chunks begin at the cuts (elastic_cuts(), made by the constructor that builds the
+    // system; a shared system's operator may lack them).
+    const std::vector<Index> cuts = elastic_cuts(mesh, *distribution);
+    boundary_end = cuts[0];
+    interior_middle = cuts[1];
+    overlap = options.overlap_halo && elastic->can_apply_elements(0, boundary_end) &&
+              elastic->can_apply_elements(boundary_end, interior_middle) &&
+              elastic->can_apply_elements(interior_middle, mesh.n_elements());
+    summary.halo_overlapped = overlap;
+  }
   for (const Probe& probe : problem.probes) {
     if (distribution && probe.node == -1) {  // owned by another rank: this rank adds zeros
       for (int c = 0; c < 3; ++c) {
@@ -638,7 +711,8 @@ TransientSolver::TransientSolver(std::shared_ptr<const fem::System> system, Tran
 
 TransientSolver::TransientSolver(const mesh::Mesh& mesh, TransientProblem problem, TransientOptions options)
     : impl_(std::make_unique<Impl>(std::move(problem), std::move(options))) {
-  const Impl& impl = *impl_;
+  Impl& impl = *impl_;
+  if (impl.problem.distribution) impl.options.elastic.element_cuts = elastic_cuts(mesh, *impl.problem.distribution);
   impl_->system = std::make_shared<fem::System>(mesh, impl.problem.materials, impl.problem.dirichlet,
                                                 impl.options.variant, impl.options.elastic,
                                                 impl.problem.distribution != nullptr);
@@ -748,6 +822,7 @@ nlohmann::json transient_json(const TransientSummary& summary) {
   json["threads"] = summary.n_threads;
   json["ranks"] = summary.ranks;
   json["elements_per_rank"] = {{"min", summary.elements_min}, {"max", summary.elements_max}};
+  json["halo_overlapped"] = summary.halo_overlapped;
   json["kernel"] = summary.kernel;
   json["warnings"] = summary.warnings;
   return json;

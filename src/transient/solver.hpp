@@ -81,6 +81,10 @@ struct TransientOptions {
   std::string run_length_key;
   std::string time_step_key;
   double progress_interval = 1.0;  ///< [s] between progress lines
+  /// A distributed run on hexahedra: apply the boundary elements, start the halo, apply the
+  /// interior elements while it travels (false: all elements, then the halo; the same sums, one
+  /// thread: bitwise).
+  bool overlap_halo = true;
   fem::ElasticOperatorOptions elastic;
 };
 
@@ -149,6 +153,7 @@ struct TransientSummary {
   int ranks = 1;                   ///< MPI ranks of a distributed run
   Index elements_min = 0;          ///< fewest elements of a rank (the partition's balance)
   Index elements_max = 0;          ///< most elements of a rank
+  bool halo_overlapped = false;    ///< interior elements applied while the halo travelled
   std::string kernel;
   std::vector<std::string> warnings;
 };

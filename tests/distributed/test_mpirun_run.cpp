@@ -156,6 +156,11 @@ void expect_same_run(const std::array<fs::path, 2>& out) {
   EXPECT_NEAR(2.0 * partition["elements"]["mean"].get<double>(), one["elements"].get<double>(), 1e-9);
   EXPECT_NEAR(2.0 * partition["owned_dofs"]["mean"].get<double>(), one["dofs"].get<double>(), 1e-9);
   EXPECT_GT(partition["halo_bytes_per_step"]["max"].get<double>(), 0.0);
+  // Some elements of each rank touch the other's nodes, the rest ran while the halo travelled.
+  EXPECT_GT(partition["boundary_elements"]["min"].get<double>(), 0.0);
+  EXPECT_LT(partition["boundary_elements"]["max"].get<double>(), partition["elements"]["min"].get<double>());
+  EXPECT_EQ(one["halo_overlapped"], false);
+  EXPECT_EQ(two["halo_overlapped"], true);
   EXPECT_TRUE(fs::exists(out[1] / "run.json"));
   // Nothing from rank 1 besides the files rank 0 writes: no stray per-rank files.
   for (const auto& entry : fs::directory_iterator(out[1])) {

@@ -1,6 +1,9 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <array>
+
+#include "core/errors.hpp"
 #include "fem/assembly.hpp"
 #include "fem/material.hpp"
 #include "mesh/box.hpp"
@@ -83,6 +86,62 @@ TEST(ElasticOperator, LatticeBatchesOfOrderOneEqualAssembledStiffness) {
   VectorX y;
   op.apply(x, y);
   EXPECT_LE((y - expected).norm(), 1e-12 * expected.norm());
+}
+
+TEST(ElasticOperator, ElementRangesBetweenCutsSumToTheWholeProduct) {
+  // Chunks of 8 cut at elements 5 and 13 (a distributed run's boundary and interior halves): the
+  // three ranges applied in turn give the whole product, on one thread to the last bit.
+  const fem::Materials materials = {fem::isotropic(2e11, 0.3, 7800.0)};
+  for (bool brick : {true, false}) {
+    for (int order : {1, 2}) {
+      const mesh::Mesh mesh = small_box(order, true);  // 24 elements
+      const mesh::DofMap dofs = mesh::make_dof_map(mesh, mesh::Variant::open);
+      ElasticOperatorOptions options;
+      options.brick_kernel = brick;
+      options.chunk_elements = 8;
+      options.element_cuts = {5, 13};
+      const ElasticOperator op(mesh, dofs, materials, options);
+      EXPECT_EQ(op.info().n_chunks, 4);  // 0-5, 5-13, 13-21, 21-24
+      EXPECT_TRUE(op.can_apply_elements(0, 5));
+      EXPECT_TRUE(op.can_apply_elements(5, 13));
+      EXPECT_TRUE(op.can_apply_elements(13, 24));
+      EXPECT_FALSE(op.can_apply_elements(0, 4));
+      EXPECT_FALSE(op.can_apply_elements(5, 12));
+      VectorX scratch = VectorX::Zero(dofs.n_dofs());
+      EXPECT_THROW(op.apply_add_elements(1.0, scratch, scratch, 0, 4), InputError);
+      omp_set_num_threads(1);
+      const VectorX x = VectorX::Random(dofs.n_dofs());
+      VectorX whole, in_turn = VectorX::Zero(dofs.n_dofs());
+      op.apply(x, whole);
+      const Index ranges[3][2] = {{0, 5}, {5, 13}, {13, 24}};
+      for (const auto& range : ranges) {
+        VectorX part = VectorX::Zero(dofs.n_dofs());
+        op.apply_add_elements(2.0, x, part, range[0], range[1]);
+        EXPECT_GT(part.norm(), 0.05 * whole.norm());  // each range does its share
+        op.apply_add_elements(1.0, x, in_turn, range[0], range[1]);
+      }
+      EXPECT_EQ((in_turn - whole).cwiseAbs().maxCoeff(), 0.0) << "brick " << brick << " order " << order;
+    }
+  }
+  // Above 20000 DOFs on 2 threads: each range runs colour by colour over its own chunks.
+  mesh::BoxSpec box;
+  box.cells = {30, 30, 10};
+  const mesh::Mesh mesh = mesh::build_box_mesh(box);
+  const mesh::DofMap dofs = mesh::make_dof_map(mesh, mesh::Variant::open);
+  ElasticOperatorOptions options;
+  options.chunk_elements = 256;
+  options.element_cuts = {1000, 5000};
+  const ElasticOperator op(mesh, dofs, materials, options);
+  ASSERT_GE(dofs.n_dofs(), 20000);
+  EXPECT_GT(op.info().n_colours, 1);
+  omp_set_num_threads(2);
+  const VectorX x = VectorX::Random(dofs.n_dofs());
+  VectorX whole, in_turn = VectorX::Zero(dofs.n_dofs());
+  op.apply(x, whole);
+  for (const auto& range : {std::array<Index, 2>{0, 1000}, {1000, 5000}, {5000, 9000}})
+    op.apply_add_elements(1.0, x, in_turn, range[0], range[1]);
+  EXPECT_LE((in_turn - whole).cwiseAbs().maxCoeff(), 1e-13 * whole.cwiseAbs().maxCoeff());
+  omp_set_num_threads(1);
 }
 
 TEST(ElasticOperator, GeneralKernelEqualsAssembledStiffness) {
