@@ -64,6 +64,13 @@ int run_ranks() {
 
 bool is_writer_rank() { return run_ranks() == 1 || distributed::world_rank() == 0; }
 
+bool halo_overlap_option() {
+  PetscBool value = PETSC_FALSE, set = PETSC_FALSE;
+  if (PetscOptionsGetBool(nullptr, nullptr, "-crackle_halo_overlap", &value, &set) != 0)
+    throw SolverError("PETSc: cannot read the option -crackle_halo_overlap");
+  return set && value;
+}
+
 DistributedTransient distribute_transient(const Model& model, const transient::TransientProblem& global,
                                           const contact::ContactOptions* contact_options) {
   DistributedTransient run;

@@ -24,6 +24,10 @@ namespace crackle::pipeline {
 int run_ranks();
 /// True on the rank that writes files and prints (rank 0; any process without MPI).
 bool is_writer_rank();
+/// Whether the distributed run overlaps the halo with the interior elements: the PETSc option
+/// `-crackle_halo_overlap` (`crackle run scene.yaml -o DIR -- -crackle_halo_overlap`); off by
+/// default, because on one machine (shared-memory MPI) it did not pay (docs/benchmarks.md section 10).
+bool halo_overlap_option();
 
 /// Runs `work` on every rank; with several ranks, all agree on its outcome (one error, thrown on
 /// every rank, when one failed). Without MPI it simply runs it.

@@ -785,6 +785,7 @@ std::unique_ptr<transient::TransientSolver> run_transient_stage(const scene::Sce
     setup.distributed = std::make_unique<DistributedTransient>(
         distribute_transient(model, setup.problem, setup.contact ? &contact_options : nullptr));
     partition = setup.distributed->partition.get();
+    setup.settings.overlap_halo = halo_overlap_option();
     solver = std::make_unique<transient::TransientSolver>(partition->local_mesh(), setup.distributed->problem,
                                                           setup.settings);
   } else {

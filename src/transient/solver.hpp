@@ -83,8 +83,9 @@ struct TransientOptions {
   double progress_interval = 1.0;  ///< [s] between progress lines
   /// A distributed run on hexahedra: apply the boundary elements, start the halo, apply the
   /// interior elements while it travels (false: all elements, then the halo; the same sums, one
-  /// thread: bitwise).
-  bool overlap_halo = true;
+  /// thread: bitwise). Off by default: with shared-memory MPI on one machine it measured no gain
+  /// (p = 2) or a loss (p = 1, ~10 %), docs/benchmarks.md section 10.
+  bool overlap_halo = false;
   fem::ElasticOperatorOptions elastic;
 };
 
