@@ -165,12 +165,11 @@ if want reduced; then
   for m in 10 20 40 80; do red "reduced-m$m" --modal-cache "$cache" --set transient.reduced.modes=$m; done
   for n in 20 80; do red "reduced-s$n" --modal-cache "$cache" --set transient.reduced.steps_per_period=$n; done
   python3 - "$full" "${runs[@]}" <<'PY'
-import json, sys
+import sys
+sys.path.insert(0, "bench")
+from run_outputs import read as read_run
 def read(d):
-    r = json.load(open(d + "/run.json")); t = json.load(open(d + "/transient.json")); s = json.load(open(d + "/spectrum.json"))
-    p = s["probes"]["tip"]; a1 = [h["amplitude"] for h in p["harmonics"] if h["order"] == 1][0]
-    st = {x["name"]: x["seconds"] for x in r["stages"]}
-    return r["wall_s"], st, t, a1, p["indices"]
+    return read_run(d, "tip")
 fw, fst, ft, fa1, fi = read(sys.argv[1])
 print("| run | modes | steps/period | steps | wall s | transient stage s | cached | A1 err | A2/A1 err | A3/A1 err |")
 print("|---|---|---|---|---|---|---|---|---|---|")
@@ -246,12 +245,11 @@ if want reduced-composite; then
   "$crackle" run data/composite-plate.yaml -o "$out/composite-reduced-cached" -q "${cut[@]}" --set transient.model=reduced \
     --modal-cache "$cache" >/dev/null
   python3 - "${COMPOSITE_FULL_DIR:-$out/composite-full}" "$out/composite-reduced-cold" "$out/composite-reduced-cached" <<'PY'
-import json, sys
+import sys
+sys.path.insert(0, "bench")
+from run_outputs import read as read_run
 def read(d):
-    r = json.load(open(d + "/run.json")); t = json.load(open(d + "/transient.json")); s = json.load(open(d + "/spectrum.json"))
-    p = s["probes"]["top"]; a1 = [h["amplitude"] for h in p["harmonics"] if h["order"] == 1][0]
-    st = {x["name"]: x["seconds"] for x in r["stages"]}
-    return r["wall_s"], st, t, a1, p["indices"]
+    return read_run(d, "top")
 fw, fst, ft, fa1, fi = read(sys.argv[1])
 print("| run | modes | pairs | steps | us/step | wall s | modal s | transient s | A1 | A2/A1 | A3/A1 | A1/2/A1 |")
 print("|---|---|---|---|---|---|---|---|---|---|---|---|")
