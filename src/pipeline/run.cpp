@@ -917,6 +917,10 @@ nlohmann::json reduced_transient_json(const ReducedModel& reduced, const reduced
                      {"friction", reduced.system.friction_coefficient}};
   json["contact_iterations"] = integrator.total_iterations();
   json["contact_factorizations"] = integrator.total_factorizations();
+  json["switching"] = {{"steps", integrator.switching_steps()},
+                       {"end_of_step_force_steps", integrator.implicit_switching_steps()},
+                       {"unconserved_steps", integrator.unconserved_switching_steps()},
+                       {"corrected_energy_j", integrator.switching_correction()}};
   return json;
 }
 
@@ -944,7 +948,17 @@ void march_reduced(reduced::ReducedIntegrator& integrator, ReducedModel& reduced
   double closed = 0.0;
   for (Index i = 0; i < n_steps; ++i) {
     reduced_sample(integrator, reduced, dt, records);
-    if (i % kEnergyInterval == 0) reduced_energy_row(integrator, initial_total, records);
+    if (i % kEnergyInterval == 0) {
+      reduced_energy_row(integrator, initial_total, records);
+      // The full model's guard (transient::TransientOptions::energy_tolerance): a run whose energy
+      // balance fails says so instead of writing a wrong signature.
+      const double tolerance = transient::TransientOptions{}.energy_tolerance;
+      if (integrator.energy_error() > tolerance)
+        throw SolverError("energy balance error " + format_number(integrator.energy_error()) + " exceeds " +
+                          format_number(tolerance) + " at t = " + format_number(integrator.time()) + " s (step " +
+                          std::to_string(integrator.n_steps_taken()) + " of " + format_number(dt) +
+                          " s); raise transient.reduced.steps_per_period");
+    }
     const double time = integrator.time();
     const transient::StepView view{i, time, dt, records.sample, empty, empty};
     if (spectrum && spectrum->add(view)) {

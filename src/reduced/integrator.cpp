@@ -127,6 +127,10 @@ void ReducedIntegrator::set_initial_state(const VectorX& modal_displacement, con
   energy_scale_ = 0.0;
   update_energy_scale();
   total_iterations_ = 0;
+  switching_steps_ = 0;
+  unconserved_switching_steps_ = 0;
+  implicit_switching_steps_ = 0;
+  switching_correction_ = 0.0;
   total_factorizations_ = 0;
   total_gauss_seidel_rounds_ = 0;
   total_factorized_rows_ = 0;
@@ -424,63 +428,157 @@ void ReducedIntegrator::solve_contact(const MatrixX& w, const VectorX& free_gap,
     solve_normal(w, free_gap, cache);
 }
 
-void ReducedIntegrator::step() {
+void ReducedIntegrator::trial_step(double a1, bool end_of_step_force, StepTrial& trial) {
   const double h = time_step_;
   const Index c = system_.n_rows(), stride = system_.rows_per_pair();
-  const double next_time = time_ + h;
-  const double a1 = load_(next_time);
   const VectorX omega2 = system_.omega.array().square();
-  // Predictors, then the end-of-step acceleration without the pair forces.
-  const VectorX q_pred = q_ + h * v_ + (0.25 * h * h) * acc_;
-  const VectorX v_pred = v_ + (0.5 * h) * acc_;
+  // Predictors, then the end-of-step acceleration without the pair forces. With the end-of-step
+  // force the step's contact force is p_{n+1} in both Newmark terms: p_n leaves the predictors.
+  VectorX start_acc = acc_;
+  if (end_of_step_force) start_acc -= modal_pair_force(p_old_);
+  VectorX q_pred = q_ + h * v_ + (0.25 * h * h) * start_acc;
+  VectorX v_pred = v_ + (0.5 * h) * start_acc;
   VectorX acc_next = (system_.load_modal * a1 - damping_.cwiseProduct(v_pred) - omega2.cwiseProduct(q_pred))
                          .cwiseQuotient(denominator_);
-  p_old_ = p_;
-  g_old_ = g_;
   if (c > 0) {
-    const VectorX q_free = q_pred + (0.25 * h * h) * acc_next;
-    VectorX free_gap = system_.pair_modes * q_free + system_.load_residual * a1;
+    p_ = p_old_;  // warm start
+    g_ = g_old_;
+    VectorX free_gap = system_.pair_modes * (q_pred + (0.25 * h * h) * acc_next) + system_.load_residual * a1;
     for (Index i = 0; i < system_.n_pairs(); ++i) free_gap[stride * i] += system_.initial_gap[i];
-    solve_contact(w_, free_gap, friction_active(), &step_factor_);
-    const std::vector<Index> loaded = nonzero_rows(p_);
-    if (!loaded.empty())
-      acc_next += (system_.pair_modes(loaded, Eigen::all).transpose() * p_(loaded)).cwiseQuotient(denominator_);
+    if (end_of_step_force) {
+      // q_{n+1} = q_free + 2 S (B Phi)^T p_{n+1}: the step compliance W + B Phi S (B Phi)^T, formed at
+      // the first such step; the contact solve runs on it with its own cached factor.
+      if (switching_w_.rows() != c) {
+        const VectorX s = (0.25 * h * h) / denominator_.array();
+        switching_w_ = w_ + system_.pair_modes * s.asDiagonal() * system_.pair_modes.transpose();
+      }
+      std::swap(w_, switching_w_);
+      std::swap(step_factor_, switching_factor_);
+      solve_contact(w_, free_gap, friction_active(), &step_factor_);
+      std::swap(w_, switching_w_);
+      std::swap(step_factor_, switching_factor_);
+      const VectorX force = modal_pair_force(p_);
+      q_pred += (0.25 * h * h) * force;
+      v_pred += (0.5 * h) * force;
+      acc_next = (system_.load_modal * a1 - damping_.cwiseProduct(v_pred) - omega2.cwiseProduct(q_pred) + force)
+                     .cwiseQuotient(denominator_);
+    } else {
+      solve_contact(w_, free_gap, friction_active(), &step_factor_);
+      acc_next += modal_pair_force(p_).cwiseQuotient(denominator_);
+    }
   } else {
     last_iterations_ = 0;
   }
-  const VectorX q_next = q_pred + (0.25 * h * h) * acc_next;
-  const VectorX v_next = v_pred + (0.5 * h) * acc_next;
-  if (!q_next.allFinite() || !v_next.allFinite() || !p_.allFinite()) fail("the state is not finite");
+  trial.q = q_pred + (0.25 * h * h) * acc_next;
+  trial.v = v_pred + (0.5 * h) * acc_next;
+  trial.acc = acc_next;
+  if (!trial.q.allFinite() || !trial.v.allFinite() || !p_.allFinite()) fail("the state is not finite");
 
   // Energy account (see ReducedEnergy): trapezoidal external work, exact Newmark damping work.
   const double a_mean = 0.5 * (load_value_ + a1);
-  const VectorX v_mean = 0.5 * (v_ + v_next);
-  energy_.external_work += a_mean * system_.load_modal.dot(q_next - q_);
-  if (c > 0) energy_.external_work += a_mean * system_.load_residual.dot(p_ - p_old_);
-  energy_.damping_dissipation += h * (damping_.array() * v_mean.array().square()).sum();
+  trial.external = a_mean * system_.load_modal.dot(trial.q - q_);
+  if (c > 0) trial.external += a_mean * system_.load_residual.dot(p_ - p_old_);
+  trial.friction = 0.0;
   if (friction_active()) {
     for (Index i = 0; i < system_.n_pairs(); ++i) {
       const Index r = 3 * i;
       const double area = system_.pair_area[i];
-      energy_.friction_dissipation +=
-          area * contact::coulomb_return_mapping(Vec3(0.0, p_old_[r + 1], p_old_[r + 2]) / area,
-                                                 Vec3(0.0, g_[r + 1] - g_old_[r + 1], g_[r + 2] - g_old_[r + 2]),
-                                                 kLocalNormal, system_.tangential_penalty,
-                                                 system_.friction_coefficient, p_[r] / area)
-                     .dissipation;
+      trial.friction += area * contact::coulomb_return_mapping(
+                                   Vec3(0.0, p_old_[r + 1], p_old_[r + 2]) / area,
+                                   Vec3(0.0, g_[r + 1] - g_old_[r + 1], g_[r + 2] - g_old_[r + 2]), kLocalNormal,
+                                   system_.tangential_penalty, system_.friction_coefficient, p_[r] / area)
+                                   .dissipation;
     }
   }
-  q_ = q_next;
-  v_ = v_next;
-  acc_ = acc_next;
+  trial.modal_strain = 0.5 * (system_.omega.array() * trial.q.array()).square().sum();
+  trial.residual_strain = residual_strain(p_, a1);
+  trial.penalty = penalty_energy();
+}
+
+void ReducedIntegrator::step() {
+  const double h = time_step_;
+  const double next_time = time_ + h;
+  const double a1 = load_(next_time);
+  p_old_ = p_;
+  g_old_ = g_;
+  StepTrial trial;
+  trial_step(a1, false, trial);
+  if (system_.n_rows() > 0 && closed_set_changed()) {
+    // A switching step (HYBRID.md §3 as implemented, see the file doc): the trapezoidal contact
+    // force is exact only while the closed set holds; here the step's energy error is removed by a
+    // velocity jump along the contact-force change, and where that cannot remove it, the step is
+    // redone with the end-of-step contact force (which cannot gain energy) and then corrected.
+    ++switching_steps_;
+    if (options_.conserve_switching_energy && !conserve_switching_energy(trial, false)) {
+      ++implicit_switching_steps_;
+      trial_step(a1, true, trial);
+      if (!conserve_switching_energy(trial, true)) ++unconserved_switching_steps_;
+    }
+  }
+  const VectorX v_mean = 0.5 * (v_ + trial.v);
+  energy_.external_work += trial.external;
+  energy_.damping_dissipation += h * (damping_.array() * v_mean.array().square()).sum();
+  energy_.friction_dissipation += trial.friction;
+  q_ = trial.q;
+  v_ = trial.v;
+  acc_ = trial.acc;
   load_value_ = a1;
   ++step_count_;
   time_ = next_time;
   energy_.kinetic = 0.5 * v_.squaredNorm();
-  energy_.modal_strain = 0.5 * (system_.omega.array() * q_.array()).square().sum();
-  energy_.residual_strain = residual_strain(p_, load_value_);
-  energy_.penalty = penalty_energy();
+  energy_.modal_strain = trial.modal_strain;
+  energy_.residual_strain = trial.residual_strain;
+  energy_.penalty = trial.penalty;
   update_energy_scale();
+}
+
+bool ReducedIntegrator::closed_set_changed() const {
+  const Index stride = system_.rows_per_pair();
+  for (Index i = 0; i < system_.n_pairs(); ++i)
+    if ((p_[stride * i] > 0.0) != (p_old_[stride * i] > 0.0)) return true;
+  return false;
+}
+
+bool ReducedIntegrator::conserve_switching_energy(StepTrial& trial, bool best_effort) {
+  // The step's energy error as a function of a velocity jump lambda d along the modal image of the
+  // contact-force change, d = (B Phi)^T (p_{n+1} - p_n):
+  //   e(lambda) = 1/2 |v + lambda d|^2 + h sum_r d_r (vbar_r + lambda d_r / 2)^2 + (the rest of the balance),
+  // vbar = (v_n + v) / 2 (the step's exact damping work): a quadratic in lambda whose root nearest 0
+  // makes the step conserve energy exactly. An energy loss (e(0) < 0) always has a root; a gain may
+  // not (false; with best_effort the minimiser of e is applied).
+  const double h = time_step_;
+  const VectorX change = p_ - p_old_;
+  const std::vector<Index> rows = nonzero_rows(change);
+  if (rows.empty()) return true;
+  const VectorX d = system_.pair_modes(rows, Eigen::all).transpose() * change(rows);
+  const VectorX v_mean = 0.5 * (v_ + trial.v);
+  const double error = 0.5 * trial.v.squaredNorm() + h * (damping_.array() * v_mean.array().square()).sum() +
+                       trial.modal_strain + trial.residual_strain + trial.penalty + trial.friction -
+                       trial.external - energy_.stored();
+  const double quadratic = 0.5 * d.squaredNorm() + 0.25 * h * (damping_.array() * d.array().square()).sum();
+  const double linear = trial.v.dot(d) + h * (damping_.array() * v_mean.array() * d.array()).sum();
+  if (!(quadratic > 0.0)) return error <= 0.0;
+  const double discriminant = linear * linear - 4.0 * quadratic * error;
+  double lambda;
+  if (discriminant >= 0.0) {
+    const double root = std::sqrt(discriminant);
+    const double denominator = linear >= 0.0 ? -linear - root : -linear + root;
+    lambda = denominator != 0.0 ? 2.0 * error / denominator : 0.0;
+  } else if (best_effort) {
+    lambda = -linear / (2.0 * quadratic);
+  } else {
+    return false;
+  }
+  switching_correction_ += std::abs(error);
+  trial.v += lambda * d;
+  trial.acc -= lambda * damping_.cwiseProduct(d);
+  return discriminant >= 0.0;
+}
+
+VectorX ReducedIntegrator::modal_pair_force(const VectorX& p) const {
+  const std::vector<Index> loaded = nonzero_rows(p);
+  if (loaded.empty()) return VectorX::Zero(system_.n_modes());
+  return system_.pair_modes(loaded, Eigen::all).transpose() * p(loaded);
 }
 
 void ReducedIntegrator::advance(Index n_steps) {

@@ -13,6 +13,22 @@
 /// the gaps are \f$g_{n+1} = \tilde g + W p_{n+1}\f$, \f$W = B\Phi\,S\,(B\Phi)^T + R\f$ (formed once per step
 /// size). The contact law closes a small piecewise-linear problem on W (see ReducedIntegrator::step).
 ///
+/// **Switching steps.** With the massless boundary the pair forces are a function p(q) of the modal
+/// state, the gradient of a convex, piecewise-quadratic potential V(q) (penalty + residual strain).
+/// While the closed set holds over a step, V is one quadratic along it and the trapezoidal rule
+/// conserves energy exactly; in a step where a pair closes or opens it does not, and when the
+/// closed system's stiffest frequency (reduced_closed_max_frequency, the penalty in series with the
+/// small residual flexibility) is far above the highest retained mode the step resolves, those
+/// errors are O(1) per closure and can pump energy without bound (measured: a 9-pair delamination
+/// with a 20 x stiffer closed system grew to 5e5 m; docs/benchmarks.md section 8.5). A switching
+/// step therefore conserves energy: its velocity gets the jump lambda (B Phi)^T (p_{n+1} - p_n)
+/// along the contact-force change that zeroes the step's energy error (a quadratic in lambda; the
+/// position, the forces and the gaps are untouched, in the spirit of the velocity update of
+/// energy-conserving impact schemes). A gain that no such jump removes is rare: the step is then
+/// redone with the end-of-step force p_{n+1} in place of the trapezoidal mean, which cannot gain
+/// energy (convexity of V: V(q_n) >= V(q_{n+1}) + grad V(q_{n+1}) . (q_n - q_{n+1})), and corrected
+/// the same way. Counted: switching_steps(), implicit_switching_steps(), unconserved_switching_steps().
+///
 /// **Energy balance** (exact to round-off for the linear part, see ReducedEnergy): the displacement is
 /// \f$u = \Phi q + G_{res}(B^T p + \hat f a)\f$ and \f$\Phi^T K G_{res} = 0\f$, so the strain energy splits into
 /// the modal part \f$\tfrac12\sum\omega_r^2 q_r^2\f$ and the residual part
@@ -54,6 +70,11 @@ struct ReducedIntegratorOptions {
   int newton_iterations = 8;     ///< friction: Newton solves before (and after each) Gauss-Seidel round
   int gauss_seidel_sweeps = 20;  ///< friction: projected Gauss-Seidel sweeps per round
   int max_gauss_seidel_rounds = 100;  ///< friction: rounds before SolverError
+  /// Switching steps (a pair closes or opens) conserve energy by a velocity jump along the
+  /// contact-force change (see ReducedIntegrator::step); false keeps the plain trapezoidal contact
+  /// force, which gains energy without bound when the closed system's stiffest frequencies are not
+  /// resolved by the step (kept to show exactly that in the tests).
+  bool conserve_switching_energy = true;
 };
 
 /// Time integrator of a ReducedSystem. Borrows the system: it must outlive the integrator.
@@ -126,6 +147,12 @@ class ReducedIntegrator {
   /// Contact iterations and Cholesky/LU factorisations summed over all steps.
   long total_iterations() const { return total_iterations_; }
   long total_factorizations() const { return total_factorizations_; }
+  /// Steps in which a pair closed or opened, and of them the ones whose energy could not be
+  /// conserved exactly (see step()); the energy the switching corrections removed or added [J].
+  long switching_steps() const { return switching_steps_; }
+  long implicit_switching_steps() const { return implicit_switching_steps_; }
+  long unconserved_switching_steps() const { return unconserved_switching_steps_; }
+  double switching_correction() const { return switching_correction_; }
   /// Friction: rounds of projected Gauss-Seidel sweeps the Newton solve needed, summed over all steps.
   long total_gauss_seidel_rounds() const { return total_gauss_seidel_rounds_; }
   /// Rows of the factorised blocks summed over all factorisations (their mean size: divide by
@@ -154,6 +181,13 @@ class ReducedIntegrator {
     double residual = 0.0;
   };
 
+  /// A step's end state and energy terms before it is committed (see trial_step).
+  struct StepTrial {
+    VectorX q, v, acc;
+    double external = 0.0, friction = 0.0;                       ///< the step's works [J]
+    double modal_strain = 0.0, residual_strain = 0.0, penalty = 0.0;  ///< end-state energies [J]
+  };
+
   struct CachedFactor {
     std::vector<Index> rows;
     Eigen::LLT<MatrixX> factor;
@@ -177,6 +211,18 @@ class ReducedIntegrator {
   /// The semi-smooth Newton direction for F = p - P at p (residual F).
   VectorX friction_newton_direction(const VectorX& p, const VectorX& residual,
                                     const std::vector<FrictionJacobian>& jacobians);
+  /// (B Phi)^T p: the modal force of the pair forces p (over their nonzero rows).
+  VectorX modal_pair_force(const VectorX& p) const;
+  /// Whether a pair closed or opened in the step (its normal force changed sign).
+  bool closed_set_changed() const;
+  /// The end-of-step state of one step from the current one, before it is committed: `p_`, `g_` are
+  /// set (from the warm start p_old_), the energies of the end state and the step's work returned.
+  /// `end_of_step_force`: the step's contact force is p_{n+1} instead of (p_n + p_{n+1}) / 2.
+  void trial_step(double a1, bool end_of_step_force, StepTrial& trial);
+  /// Switching step: the velocity jump along the contact-force change that makes the trial step
+  /// conserve energy; false if there is none (with `best_effort`, the jump that comes closest is
+  /// applied).
+  bool conserve_switching_energy(StepTrial& trial, bool best_effort);
   double penalty_energy() const;
   double residual_strain(const VectorX& p, double a) const;
   void update_energy_scale();
@@ -192,6 +238,12 @@ class ReducedIntegrator {
   VectorX normal_stiffness_, tangential_stiffness_;  ///< eps A per pair [N/m]
   VectorX row_compliance_;  ///< friction: 1 / (eps A) per row (the Newton merit's scaling)
   MatrixX w_;
+  MatrixX switching_w_;             ///< W + B Phi S (B Phi)^T, formed at the first end-of-step-force step
+  CachedFactor switching_factor_;   ///< its contact factor
+  long switching_steps_ = 0;
+  long implicit_switching_steps_ = 0;
+  long unconserved_switching_steps_ = 0;
+  double switching_correction_ = 0.0;
 
   double time_ = 0.0;
   double load_value_ = 0.0;

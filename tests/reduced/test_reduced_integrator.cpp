@@ -262,6 +262,73 @@ TEST(ReducedIntegrator, UndampedChatteringConservesEnergyOverAThousandPeriods) {
   EXPECT_EQ(integrator.energy().damping_dissipation, 0.0);
 }
 
+/// Undamped chattering of a 30-mass chain reduced to 20 modes, five pairs, a stiff penalty and the
+/// step of 40 per period of the highest retained mode: the closed system's stiffest frequencies
+/// (the pairs' penalty in series with the small residual flexibility) are far above that, so a
+/// switching step is not resolved. Returns the worst energy error over `periods` of mode 1.
+struct SwitchingRun {
+  double worst_energy_error = 0.0;
+  double closed_over_highest = 0.0;  ///< reduced_closed_max_frequency / highest mode
+  long switching_steps = 0, implicit = 0, unconserved = 0;
+  Index transitions = 0;
+  bool finished = true;
+};
+
+SwitchingRun stiff_chattering(bool conserve, double periods) {
+  Chain chain = make_chain(60, 1000.0, 1.0);
+  chain.pair_rows = MatrixX::Zero(5, 60);
+  for (int k = 0; k < 5; ++k) chain.pair_rows(k, 10 * k + 9) = 1.0;
+  ReducedSystem system = reduce(chain, 20);
+  system.residual *= 1e-3;       // a stiff boundary: little static flexibility left beyond the modes
+  system.normal_penalty = 1e11;  // eps_N A = 1e7 N/m, 1e4 x the chain's springs
+  for (int k = 0; k < 5; ++k) system.initial_gap[k] = k % 2 == 0 ? 0.0 : 1e-3;
+  SwitchingRun run;
+  const double highest = system.omega.maxCoeff() / (2.0 * kPi);
+  run.closed_over_highest = reduced_closed_max_frequency(system) / highest;
+  ReducedIntegratorOptions options;
+  options.conserve_switching_energy = conserve;
+  ReducedIntegrator integrator(system, reduced_time_step(system, 0.0, 40), nullptr, options);
+  VectorX velocity = VectorX::Zero(20);
+  velocity[0] = 0.1;
+  velocity[3] = 0.05;
+  velocity[7] = 0.02;
+  integrator.set_initial_state(VectorX::Zero(20), velocity);
+  const Index n_steps = static_cast<Index>(periods * 2.0 * kPi / system.omega[0] / integrator.time_step());
+  Index previous_closed = integrator.n_closed();
+  try {
+    for (Index n = 0; n < n_steps; ++n) {
+      integrator.step();
+      run.transitions += std::abs(integrator.n_closed() - previous_closed);
+      previous_closed = integrator.n_closed();
+      run.worst_energy_error = std::max(run.worst_energy_error, integrator.energy_error());
+      if (run.worst_energy_error > 1.0) break;  // blown up: enough seen
+    }
+  } catch (const SolverError&) {
+    run.finished = false;  // the state left the finite numbers
+    run.worst_energy_error = std::max(run.worst_energy_error, 1.0);
+  }
+  run.switching_steps = integrator.switching_steps();
+  run.implicit = integrator.implicit_switching_steps();
+  run.unconserved = integrator.unconserved_switching_steps();
+  return run;
+}
+
+TEST(ReducedIntegrator, UnresolvedSwitchingStepsConserveEnergyInsteadOfGainingIt) {
+  const SwitchingRun plain = stiff_chattering(false, 300.0);
+  const SwitchingRun conserved = stiff_chattering(true, 300.0);
+  std::printf("closed/highest frequency %.1f; trapezoidal: worst energy error %.3e (%s); conserving: %.3e, "
+              "%ld switching steps (%ld redone with the end-of-step force), %ld not conserved exactly, "
+              "%ld transitions\n",
+              plain.closed_over_highest, plain.worst_energy_error, plain.finished ? "finite" : "not finite",
+              conserved.worst_energy_error, conserved.switching_steps, conserved.implicit, conserved.unconserved,
+              static_cast<long>(conserved.transitions));
+  EXPECT_GT(plain.closed_over_highest, 10.0);  // the switching steps really are unresolved
+  EXPECT_GT(conserved.transitions, 1000);      // and the pairs really breathe
+  EXPECT_GT(plain.worst_energy_error, 0.05);   // the plain trapezoidal contact force gains energy
+  EXPECT_LT(conserved.worst_energy_error, 1e-3);
+  EXPECT_EQ(conserved.unconserved, 0);
+}
+
 /// A block of mass m on one rigid mode (x = q / sqrt(m)), pressed by a load through the massless
 /// boundary onto a pair with friction; rows: normal, tangent 1 (along x), tangent 2.
 ReducedSystem pressed_block(double mass, double mu, double press) {
