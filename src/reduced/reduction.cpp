@@ -1,5 +1,6 @@
 #include "reduced/reduction.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -96,6 +97,20 @@ SparseMatrix diagonal(const VectorX& values) {
   return matrix;
 }
 
+/// Modes to ask for so that the highest lies above `target_hz`, from the n computed (ascending)
+/// frequencies: the mode count of a body grows as a power of the frequency (Weyl: f^1 for a
+/// beam's bending, f^2 for a plate, f^3 for a solid), N(f) = n (f / f_n)^alpha with alpha fitted
+/// over the upper half of the spectrum (clamped to [1, 3]), plus 20 % and 2 spare modes.
+Index modes_below(const VectorX& frequencies_hz, double target_hz) {
+  const Index n = frequencies_hz.size();
+  if (n < 4 || !(frequencies_hz[n / 2 - 1] > 0.0)) return 2 * std::max<Index>(n, 1);
+  const double ratio = frequencies_hz[n - 1] / frequencies_hz[n / 2 - 1];
+  const double alpha = ratio > 1.0 ? std::clamp(std::log(static_cast<double>(n) / (n / 2)) / std::log(ratio), 1.0, 3.0)
+                                   : 3.0;
+  const double estimate = n * std::pow(target_hz / frequencies_hz[n - 1], alpha);
+  return static_cast<Index>(std::ceil(1.2 * estimate)) + 2;
+}
+
 /// Lowest modes of (K, M): a fixed count, or every mode up to `target_hz` (solving for more as needed).
 modal::ModeSet lowest_modes(const SparseMatrix& stiffness, const SparseMatrix& mass, const ReductionOptions& options,
                             int n_rigid) {
@@ -116,7 +131,8 @@ modal::ModeSet lowest_modes(const SparseMatrix& stiffness, const SparseMatrix& m
     modal::ModeSet modes = modal::solve_modes(stiffness, mass, settings, n_rigid);
     if (modes.n_modes() > 0 && modes.frequencies_hz[modes.n_modes() - 1] > target) return modes;
     if (settings.modes >= n_free / 2) return modes;  // all the body has (small test meshes)
-    settings.modes = static_cast<int>(std::min<Index>(2 * settings.modes, n_free / 2));
+    const Index wanted = std::max<Index>(settings.modes + 4, modes_below(modes.frequencies_hz, target));
+    settings.modes = static_cast<int>(std::min<Index>({wanted, 8 * Index{settings.modes}, n_free / 2}));
   }
 }
 
