@@ -64,9 +64,10 @@ ReducedIntegrator::ReducedIntegrator(const ReducedSystem& system, double time_st
     throw InputError("reduced integrator: time step " + format_number(time_step_) + " s must be positive");
   if (!load_) load_ = [](double) { return 0.0; };
   const double h = time_step_;
-  const VectorX omega2 = system_.omega.array().square();
-  damping_ = system_.rayleigh_alpha + system_.rayleigh_beta * omega2.array();
-  denominator_ = 1.0 + 0.5 * h * damping_.array() + 0.25 * h * h * omega2.array();
+  omega2_ = system_.omega.array().square();
+  damping_ = system_.rayleigh_alpha + system_.rayleigh_beta * omega2_.array();
+  denominator_ = 1.0 + 0.5 * h * damping_.array() + 0.25 * h * h * omega2_.array();
+  pair_modes_transposed_ = system_.pair_modes.transpose();
   // W = B Phi S (B Phi)^T + R, S_r = (h^2/4) / denominator_r.
   const VectorX s = (0.25 * h * h) / denominator_.array();
   w_ = system_.pair_modes * s.asDiagonal() * system_.pair_modes.transpose() + system_.residual;
@@ -431,7 +432,7 @@ void ReducedIntegrator::solve_contact(const MatrixX& w, const VectorX& free_gap,
 void ReducedIntegrator::trial_step(double a1, bool end_of_step_force, StepTrial& trial) {
   const double h = time_step_;
   const Index c = system_.n_rows(), stride = system_.rows_per_pair();
-  const VectorX omega2 = system_.omega.array().square();
+  const VectorX& omega2 = omega2_;
   // Predictors, then the end-of-step acceleration without the pair forces. With the end-of-step
   // force the step's contact force is p_{n+1} in both Newmark terms: p_n leaves the predictors.
   VectorX start_acc = acc_;
@@ -547,10 +548,8 @@ bool ReducedIntegrator::conserve_switching_energy(StepTrial& trial, bool best_ef
   // makes the step conserve energy exactly. An energy loss (e(0) < 0) always has a root; a gain may
   // not (false; with best_effort the minimiser of e is applied).
   const double h = time_step_;
-  const VectorX change = p_ - p_old_;
-  const std::vector<Index> rows = nonzero_rows(change);
-  if (rows.empty()) return true;
-  const VectorX d = system_.pair_modes(rows, Eigen::all).transpose() * change(rows);
+  const VectorX d = modal_pair_force(p_ - p_old_);
+  if (d.squaredNorm() == 0.0) return true;
   const VectorX v_mean = 0.5 * (v_ + trial.v);
   const double error = 0.5 * trial.v.squaredNorm() + h * (damping_.array() * v_mean.array().square()).sum() +
                        trial.modal_strain + trial.residual_strain + trial.penalty + trial.friction -
@@ -576,9 +575,10 @@ bool ReducedIntegrator::conserve_switching_energy(StepTrial& trial, bool best_ef
 }
 
 VectorX ReducedIntegrator::modal_pair_force(const VectorX& p) const {
-  const std::vector<Index> loaded = nonzero_rows(p);
-  if (loaded.empty()) return VectorX::Zero(system_.n_modes());
-  return system_.pair_modes(loaded, Eigen::all).transpose() * p(loaded);
+  VectorX force = VectorX::Zero(system_.n_modes());
+  for (Index r = 0; r < p.size(); ++r)
+    if (p[r] != 0.0) force.noalias() += p[r] * pair_modes_transposed_.col(r);
+  return force;
 }
 
 void ReducedIntegrator::advance(Index n_steps) {

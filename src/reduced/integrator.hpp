@@ -233,6 +233,8 @@ class ReducedIntegrator {
   LoadFunction load_;
   ReducedIntegratorOptions options_;
 
+  VectorX omega2_;       ///< omega_r^2
+  MatrixX pair_modes_transposed_;  ///< (B Phi)^T, m x c: a pair row's modal force is a contiguous column
   VectorX damping_;      ///< d_r = alpha + beta omega_r^2
   VectorX denominator_;  ///< 1 + d_r h/2 + omega_r^2 h^2/4
   VectorX normal_stiffness_, tangential_stiffness_;  ///< eps A per pair [N/m]
