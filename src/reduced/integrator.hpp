@@ -60,14 +60,16 @@ struct ReducedIntegratorOptions {
 ///
 /// **Contact solve per step.** Unknowns: the forces of the closed pairs' rows. Frictionless: the
 /// linear complementarity problem \f$p \ge 0,\ K^{-1}p + g \ge 0,\ p^T(K^{-1}p + g) = 0\f$ with
-/// \f$g = \tilde g + W p\f$ (K = eps_N A; the penalty of eq. 25d), i.e. the strictly convex problem
-/// \f$\min_{p \ge 0} \tfrac12 p^T H p + \tilde g^T p\f$, \f$H = K^{-1} + W\f$, solved by a primal active
-/// set (Lawson-Hanson): from the previous step's forces (feasible), step toward the minimiser
-/// \f$H_{AA}\,p_A = -\tilde g_A\f$ of the current set A, release the rows whose force reaches 0 on
-/// the way, and once the minimiser is feasible add the most penetrated open row (smallest g < 0).
-/// The Cholesky factor of \f$H_{AA}\f$ is kept from step to step and updated by one row per set
-/// change (appended, or removed with a rank-one update of the rows below), so the intermediate sets
-/// never exceed the final one by more than the rows released on the way. With friction: the condensed pair equations \f$F(p) = p - P(z(p)) = 0\f$,
+/// \f$g = \tilde g + W p\f$ (K = eps_N A, the penalty of eq. 25d), one solution (H = K^{-1} + W is
+/// symmetric positive definite). A primal-dual active set, warm-started from the previous step's
+/// closed rows: each iteration solves \f$H_{AA}\,p_A = -\tilde g_A\f$, releases the rows with p <= 0 and
+/// activates the open rows with g < 0, in stages for the first iterations (only the rows penetrated
+/// at least half as deep as the deepest; the forces of those lift the others or leave them to the
+/// next iteration). The Cholesky factor of \f$H_{AA}\f$ is kept from step to step and follows the set:
+/// a set change cuts it before the first released row (the rows before keep their factor) and
+/// appends the kept rows after it with the entering ones as one block (a triangular solve and the
+/// factor of the Schur complement), instead of refactorising the whole set. With friction: the
+/// condensed pair equations \f$F(p) = p - P(z(p)) = 0\f$,
 /// z the trial forces (normal \f$-\varepsilon_N A g_N\f$, tangential the elastic predictor of the step's
 /// tangential increment) and P the penalty (eq. 25d) with Coulomb's return mapping (eq. 15,
 /// contact::coulomb_return_mapping). A semi-smooth Newton with its generalized Jacobian (Cholesky on
@@ -76,14 +78,17 @@ struct ReducedIntegratorOptions {
 /// restarts as rounds of projected Gauss-Seidel sweeps over the pairs on \f$K^{-1} + W\f$ (robust,
 /// linear), each round followed by a Newton finish kept only if it converges.
 ///
-/// **Cost.** Setup: W in O(c^2 m). Per step: O(c m) for the free gaps; frictionless, per active-set
-/// iteration O(c |A|) for the gaps and O(|A|^2) for the solve and the factor's one-row update, with
-/// |A| at most the final set plus the rows released in the step (a full O(|A|^3/3) factorisation
-/// only when the warm set is not the cached one: the first step after set_initial_state). Before
-/// (2026-12-01) each new active set was refactorised densely and the primal-dual first iteration took
-/// in every penetrated row: at 1081 pairs and 10 modes, sets of all 1081 rows for a final ~20. With
-/// friction: an O((3|A|)^3) LU per Newton solve while any pair slips (a Cholesky factor, cached,
-/// while all stick), and O(c^2) per Gauss-Seidel sweep. Measured: docs/benchmarks.md section 8.3.
+/// **Cost.** Setup: W in O(c^2 m). Per step: O(c m) for the free gaps, O(c |A|) per iteration for
+/// the gaps and O(|A|^2) for the solve. Frictionless factor work per set change: appending b rows
+/// after the first k kept ones costs \f$k^2 b + k b^2 + b^3/3\f$ (total_factor_work()), so a step whose
+/// set only grows or loses its last rows pays for the new rows only, and one that releases an early
+/// row refactorises what follows it. The sets are genuinely large at impacts: with long steps (few
+/// modes) the whole crack can close for a step (bench_reduced, 1081 pairs, 10 modes: final sets of
+/// 400-560 rows a few times per period, a mean of 20). Measured against the former dense
+/// refactorisation of every new set: 0.5-0.7 of its factorisation work on the tests' cases, 1.5-2x
+/// less CPU per step at 300-1081 pairs and 10 modes, no change at 40 modes (docs/benchmarks.md 8.3).
+/// With friction: an O((3|A|)^3) LU per Newton solve while any pair slips (a Cholesky factor,
+/// cached, while all stick), and O(c^2) per Gauss-Seidel sweep.
 class ReducedIntegrator {
  public:
   using LoadFunction = std::function<double(double)>;
@@ -139,10 +144,10 @@ class ReducedIntegrator {
   /// Contact iterations and Cholesky/LU factorisations (from scratch) summed over all steps.
   long total_iterations() const { return total_iterations_; }
   long total_factorizations() const { return total_factorizations_; }
-  /// Frictionless: rows appended to or removed from the cached Cholesky factor, summed over all steps
-  /// (each O(|A|^2), no refactorisation).
+  /// Frictionless: rows appended to or cut from the cached Cholesky factor (not from scratch), summed
+  /// over all steps.
   long total_factor_updates() const { return total_factor_updates_; }
-  /// Floating-point operations of the factorisations and factor updates, summed over all steps
+  /// Frictionless: floating-point operations of the factorisations and factor updates, summed over all steps
   /// (counted from the block sizes: |A|^2 b + |A| b^2 + b^3/3 to append b rows to |A|, so |A|^3/3 for
   /// a factorisation from scratch): the load-independent share of the cost.
   double total_factor_work() const { return total_factor_work_; }
@@ -175,7 +180,7 @@ class ReducedIntegrator {
   };
 
   /// Cholesky factor \f$L L^T = H_{AA}\f$ of the frictionless step matrix \f$H = K^{-1} + W\f$ over an
-  /// ordered row set A that grows and shrinks one row at a time, O(|A|^2) each.
+  /// ordered row set A, grown by appending blocks of rows and shrunk by cutting its tail.
   class ActiveSetFactor {
    public:
     Index size() const { return static_cast<Index>(rows_.size()); }

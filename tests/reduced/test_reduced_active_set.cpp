@@ -30,7 +30,7 @@ constexpr double kPi = 3.14159265358979323846;
 struct DenseActiveSet {
   VectorX force, gap;
   long largest_set = 0;  ///< rows of the largest set factorised
-  double work = 0.0;     ///< floating-point operations of its factorisations, |A|^3/3 each
+  double work = 0.0;     ///< floating-point operations of its factorisations, |A|^3/3 each (cache hits free)
   int iterations = 0;
 };
 
@@ -53,7 +53,8 @@ DenseActiveSet dense_active_set(const MatrixX& w, const VectorX& stiffness, cons
       result.force(rows) = x;
       result.gap += w(Eigen::all, rows) * x;
       result.largest_set = std::max(result.largest_set, static_cast<long>(rows.size()));
-      result.work += std::pow(static_cast<double>(rows.size()), 3) / 3.0;
+      // The first set is the previous step's final one, whose factor the old solve had cached.
+      if (result.iterations > 1) result.work += std::pow(static_cast<double>(rows.size()), 3) / 3.0;
     }
     bool changed = false;
     for (Index i = 0; i < n; ++i) {
@@ -117,7 +118,7 @@ Comparison compare_with_reference(ReducedIntegrator& integrator, const ReducedSy
 // opened and closed by a harmonic pull on the free end), 16 x 16 x 2 cells: 136 pairs, 10 modes. The
 // steps follow the highest retained mode, so with few modes they are long: the free gaps of most of
 // the delamination go negative in a closing step while the final set is a few pairs near the tip.
-TEST(ReducedActiveSet, PlateWithLongStepsMatchesTheDenseActiveSetForAFractionOfTheWork) {
+TEST(ReducedActiveSet, PlateWithLongStepsMatchesTheDenseActiveSetForLessWork) {
   mesh::BoxSpec box;
   box.size = Vec3(0.2, 0.2, 0.01);
   box.cells = {16, 16, 2};
@@ -158,11 +159,11 @@ TEST(ReducedActiveSet, PlateWithLongStepsMatchesTheDenseActiveSetForAFractionOfT
   EXPECT_LT(comparison.gap, 1e-10);
   EXPECT_LT(comparison.complementarity, 1e-8);
   EXPECT_GE(comparison.negative, 0.0);
-  // The case the change is for: intermediate sets far larger than most final ones, the whole crack
-  // closing at the impacts. The updated factor does a fraction of the refactorisations' work and never
-  // holds a larger set than they factorised.
+  // The case the change is for: long steps, intermediate sets larger than the final ones, the whole
+  // crack closing at the impacts. The updated factor does less work than the refactorisations (the
+  // warm set's, cached, counted free) and never holds a larger set than they factorised.
   EXPECT_EQ(comparison.largest_final, 136);
-  EXPECT_LT(integrator.total_factor_work(), 0.6 * comparison.reference_work);  // measured 0.44
+  EXPECT_LT(integrator.total_factor_work(), 0.8 * comparison.reference_work);  // measured 0.70
   EXPECT_LE(integrator.largest_factorized_rows(), comparison.reference_largest);
 }
 
@@ -215,7 +216,7 @@ TEST(ReducedActiveSet, RandomCoupledPairsMatchTheDenseActiveSetAtEveryStep) {
   EXPECT_LT(comparison.gap, 1e-10);
   EXPECT_LT(comparison.complementarity, 1e-10);
   EXPECT_GE(comparison.negative, 0.0);
-  EXPECT_LT(integrator.total_factor_work(), comparison.reference_work);
+  EXPECT_LT(integrator.total_factor_work(), 0.6 * comparison.reference_work);  // measured 0.49
 }
 
 }  // namespace
