@@ -8,8 +8,14 @@
 /// Timed: the second period (after one period from rest). `--friction MU` adds Coulomb friction on the
 /// delamination (3 rows per pair, the automatic tangential penalty). Usage:
 ///   bench_reduced [--pairs 100,300,1000] [--modes 10,40] [--steps 200] [--friction 0.3]
-/// One table row per case on stdout, progress on stderr.
+/// "CPU us/step": the process's CPU time (run with OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 to keep
+/// worker threads' spinning out). One table row per case on stdout, progress on stderr. "rows/factorisation (largest)": the mean block
+/// of the factorisations from scratch in the timed period, and in brackets the largest block factorised
+/// or held by the updated factor since the start; "row updates": rows appended to or cut from the
+/// frictionless solve's cached factor; "factor Mflop": the factorisations' and updates' floating-point
+/// operations counted from the block sizes (frictionless only; independent of the load).
 #include <cmath>
+#include <ctime>
 #include <cstdio>
 #include <sstream>
 #include <string>
@@ -29,6 +35,13 @@ namespace {
 using crackle::bench::parse_list;
 
 constexpr double kPi = 3.14159265358979323846;
+
+/// CPU time of the process [s] (all threads): on a loaded machine the wall time waits for a core.
+double process_cpu_seconds() {
+  timespec now{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
+  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
+}
 
 }  // namespace
 
@@ -51,9 +64,9 @@ int main(int argc, char** argv) {
   }
   int highest_modes = 0;
   for (double m : mode_counts) highest_modes = std::max(highest_modes, static_cast<int>(m));
-  std::printf("| pairs | free DOFs | modes | modes s | static images s | W MiB | us/step | iterations/step | "
-              "factorisations/step | rows/factorisation (largest) | closed fraction | slipping fraction | peak RSS MiB |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| pairs | free DOFs | modes | modes s | static images s | W MiB | us/step | CPU us/step | iterations/step | "
+              "factorisations/step | rows/factorisation (largest) | row updates/step | factor Mflop/step | closed fraction | slipping fraction | peak RSS MiB |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (double target : pair_targets) {
     // (n/2) (n + 1) pairs ~ target.
     int n = 4;
@@ -96,25 +109,29 @@ int main(int argc, char** argv) {
                                             [frequency](double t) { return std::sin(2.0 * kPi * frequency * t); });
       integrator.advance(steps_per_period);
       const long iterations = integrator.total_iterations(), factorizations = integrator.total_factorizations();
-      const long factorized_rows = integrator.total_factorized_rows();
+      const long factorized_rows = integrator.total_factorized_rows(), updates = integrator.total_factor_updates();
+      const double work = integrator.total_factor_work();
       double closed = 0.0, slipping = 0.0;
       Stopwatch clock;
+      const double cpu_start = process_cpu_seconds();
       for (int k = 0; k < steps_per_period; ++k) {
         integrator.step();
         closed += integrator.closed_fraction();
         slipping += static_cast<double>(integrator.n_slipping()) / reduced_system.n_pairs();
       }
-      const double seconds = clock.seconds();
+      const double seconds = clock.seconds(), cpu_seconds = process_cpu_seconds() - cpu_start;
       const double c = static_cast<double>(reduced_system.n_rows());
-      std::printf("| %lld | %lld | %lld | %.2f | %.2f | %.1f | %.1f | %.2f | %.3f | %.0f (%ld) | %.2f | %.2f | %.0f |\n",
+      std::printf("| %lld | %lld | %lld | %.2f | %.2f | %.1f | %.1f | %.1f | %.2f | %.3f | %.0f (%ld) | %.2f | %.3f | %.2f | %.2f | %.0f |\n",
                   static_cast<long long>(reduced_system.n_pairs()), static_cast<long long>(reduction.shapes.rows()),
                   static_cast<long long>(modes), reduction.modes_s, reduction.flexibility_s,
-                  c * c * 8.0 / (1024.0 * 1024.0), 1e6 * seconds / steps_per_period,
+                  c * c * 8.0 / (1024.0 * 1024.0), 1e6 * seconds / steps_per_period, 1e6 * cpu_seconds / steps_per_period,
                   double(integrator.total_iterations() - iterations) / steps_per_period,
                   double(integrator.total_factorizations() - factorizations) / steps_per_period,
                   double(integrator.total_factorized_rows() - factorized_rows) /
                       std::max(1L, integrator.total_factorizations() - factorizations),
                   integrator.largest_factorized_rows(),
+                  double(integrator.total_factor_updates() - updates) / steps_per_period,
+                  1e-6 * (integrator.total_factor_work() - work) / steps_per_period,
                   closed / steps_per_period, slipping / steps_per_period, peak_rss_bytes() / (1024.0 * 1024.0));
       std::fflush(stdout);
     }

@@ -186,7 +186,8 @@ if want reduced-scale; then
   echo
   echo "### Reduced transient: cost per step against crack pairs and modes (bench_reduced, one process)"
   load
-  /usr/bin/time -v -o "$out/reduced-scale-time.txt" "$BUILD"/bench/bench_reduced \
+  # One thread: the CPU us/step column is then the solve's own cost.
+  OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 /usr/bin/time -v -o "$out/reduced-scale-time.txt" "$BUILD"/bench/bench_reduced \
     --pairs "${REDUCED_PAIRS:-100,300,1000,3000,5000}" --modes 10,40
   echo
   echo "peak RSS of the whole sweep over sizes: $(awk '/Maximum resident/{print int($6/1024)}' "$out/reduced-scale-time.txt") MiB"

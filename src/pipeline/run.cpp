@@ -836,19 +836,6 @@ struct ReducedRecords {
   Index samples = 0;            ///< samples taken so far
 };
 
-/// Contact state of pair `pair` of the reduced model from its forces (as contact::PenaltyContact::pair_state):
-/// 0 open (no normal force), 2 closed and slipping (always without friction: the faces slide freely), 1
-/// closed and sticking (tangential force inside Coulomb's cone; on it, the return mapping's slip).
-int reduced_pair_state(const reduced::ReducedSystem& system, const VectorX& forces, Index pair) {
-  constexpr double kConeTolerance = 1e-9;  // relative: a force on the cone to round-off is slipping
-  const Index row = system.rows_per_pair() * pair;
-  const double normal = forces[row];
-  if (!(normal > 0.0)) return 0;
-  if (!system.friction || !(system.friction_coefficient > 0.0)) return 2;
-  const double tangential = std::hypot(forces[row + 1], forces[row + 2]);
-  return tangential < (1.0 - kConeTolerance) * system.friction_coefficient * normal ? 1 : 2;
-}
-
 /// The probe sample of the integrator's state: the modal part of v and a exactly, the massless
 /// residual part (C G_res (B^T p + f a)) by differences of successive samples; an opening probe's
 /// gap gets g0 and its pair's contact state.
@@ -880,8 +867,7 @@ void reduced_sample(const reduced::ReducedIntegrator& integrator, const ReducedM
     if (!records.probes.opening[p]) continue;
     const Index pair = reduced.probe_pairs[p];
     const double gap = records.sample[9 * p];
-    records.probes.states[p].push_back(pair >= 0 ? reduced_pair_state(system, integrator.pair_forces(), pair)
-                                                  : gap < 0.0 ? 2 : 0);
+    records.probes.states[p].push_back(pair >= 0 ? integrator.pair_state(pair) : gap < 0.0 ? 2 : 0);
   }
 }
 

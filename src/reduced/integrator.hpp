@@ -63,7 +63,7 @@ struct ReducedEnergy {
 
 /// Options of the per-step contact solve.
 struct ReducedIntegratorOptions {
-  int max_contact_iterations = 100;  ///< active-set iterations (friction: Newton solves) per step before SolverError
+  int max_contact_iterations = 100;  ///< frictionless: active-set iterations per step before SolverError
   /// Friction: converged when \f$|p - P(z(p))|_\infty \le\f$ force_tolerance \f$\max(|p|_\infty, |P|_\infty)\f$.
   double force_tolerance = 1e-9;
   double min_line_search_step = 1.0 / 1024.0;  ///< friction Newton: smallest damping factor tried
@@ -79,11 +79,18 @@ struct ReducedIntegratorOptions {
 
 /// Time integrator of a ReducedSystem. Borrows the system: it must outlive the integrator.
 ///
-/// **Contact solve per step.** Unknowns: the forces of the closed pairs' rows. Frictionless: a
-/// primal-dual active set on the normal rows, warm-started from the previous step; each iteration
-/// solves \f$(K_A^{-1} + W_{AA})\,p_A = -\tilde g_A\f$ (K_A = eps_N A) by a Cholesky factor cached for
-/// the active set (kept while the set does not change), then re-activates rows with g < 0 and
-/// releases rows with p <= 0. With friction: the condensed pair equations \f$F(p) = p - P(z(p)) = 0\f$,
+/// **Contact solve per step.** Unknowns: the forces of the closed pairs' rows. Frictionless: the
+/// linear complementarity problem \f$p \ge 0,\ K^{-1}p + g \ge 0,\ p^T(K^{-1}p + g) = 0\f$ with
+/// \f$g = \tilde g + W p\f$ (K = eps_N A, the penalty of eq. 25d), one solution (H = K^{-1} + W is
+/// symmetric positive definite). A primal-dual active set, warm-started from the previous step's
+/// closed rows: each iteration solves \f$H_{AA}\,p_A = -\tilde g_A\f$, releases the rows with p <= 0 and
+/// activates the open rows with g < 0, in stages for the first iterations (only the rows penetrated
+/// at least half as deep as the deepest; the forces of those lift the others or leave them to the
+/// next iteration). The Cholesky factor of \f$H_{AA}\f$ is kept from step to step and follows the set:
+/// a set change cuts it before the first released row (the rows before keep their factor) and
+/// appends the kept rows after it with the entering ones as one block (a triangular solve and the
+/// factor of the Schur complement), instead of refactorising the whole set. With friction: the
+/// condensed pair equations \f$F(p) = p - P(z(p)) = 0\f$,
 /// z the trial forces (normal \f$-\varepsilon_N A g_N\f$, tangential the elastic predictor of the step's
 /// tangential increment) and P the penalty (eq. 25d) with Coulomb's return mapping (eq. 15,
 /// contact::coulomb_return_mapping). A semi-smooth Newton with its generalized Jacobian (Cholesky on
@@ -92,10 +99,17 @@ struct ReducedIntegratorOptions {
 /// restarts as rounds of projected Gauss-Seidel sweeps over the pairs on \f$K^{-1} + W\f$ (robust,
 /// linear), each round followed by a Newton finish kept only if it converges.
 ///
-/// **Cost.** Setup: W in O(c^2 m). Per step: O(c m) for the free gaps, O(c |A|) for the gaps of the
-/// solution, O(|A|^2) per Cholesky solve, plus O(|A|^3/3) whenever the active set differs from the
-/// cached one (frictionless), or an O((3|A|)^3) LU per Newton solve while any pair slips, and O(c^2)
-/// per Gauss-Seidel sweep (friction). Measured: docs/benchmarks.md section 8.
+/// **Cost.** Setup: W in O(c^2 m). Per step: O(c m) for the free gaps, O(c |A|) per iteration for
+/// the gaps and O(|A|^2) for the solve. Frictionless factor work per set change: appending b rows
+/// after the first k kept ones costs \f$k^2 b + k b^2 + b^3/3\f$ (total_factor_work()), so a step whose
+/// set only grows or loses its last rows pays for the new rows only, and one that releases an early
+/// row refactorises what follows it. The sets are genuinely large at impacts: with long steps (few
+/// modes) the whole crack can close for a step (bench_reduced, 1081 pairs, 10 modes: final sets of
+/// 400-560 rows a few times per period, a mean of 20). Measured against the former dense
+/// refactorisation of every new set: 0.5-0.7 of its factorisation work on the tests' cases, 1.5-2x
+/// less CPU per step at 300-1081 pairs and 10 modes, no change at 40 modes (docs/benchmarks.md 8.3).
+/// With friction: an O((3|A|)^3) LU per Newton solve while any pair slips (a Cholesky factor,
+/// cached, while all stick), and O(c^2) per Gauss-Seidel sweep.
 class ReducedIntegrator {
  public:
   using LoadFunction = std::function<double(double)>;
@@ -135,6 +149,10 @@ class ReducedIntegrator {
 
   Index n_closed() const;    ///< pairs with a positive normal force
   Index n_slipping() const;  ///< closed pairs slipping in the last step
+  /// Contact state of `pair` after the last step, as contact::PenaltyContact::pair_state: 0 open (no
+  /// normal force), 1 closed and sticking (the solve's return mapping), 2 closed and slipping (always
+  /// without friction: the faces slide freely).
+  int pair_state(Index pair) const;
   double closed_fraction() const;  ///< n_closed / n_pairs (0 without pairs)
 
   const ReducedEnergy& energy() const { return energy_; }
@@ -144,7 +162,7 @@ class ReducedIntegrator {
 
   /// Contact iterations of the last step (1 = the warm-started guess was right).
   int last_iterations() const { return last_iterations_; }
-  /// Contact iterations and Cholesky/LU factorisations summed over all steps.
+  /// Contact iterations and Cholesky/LU factorisations (from scratch) summed over all steps.
   long total_iterations() const { return total_iterations_; }
   long total_factorizations() const { return total_factorizations_; }
   /// Steps in which a pair closed or opened, and of them the ones whose energy could not be
@@ -153,12 +171,19 @@ class ReducedIntegrator {
   long implicit_switching_steps() const { return implicit_switching_steps_; }
   long unconserved_switching_steps() const { return unconserved_switching_steps_; }
   double switching_correction() const { return switching_correction_; }
+  /// Frictionless: rows appended to or cut from the cached Cholesky factor (not from scratch), summed
+  /// over all steps.
+  long total_factor_updates() const { return total_factor_updates_; }
+  /// Frictionless: floating-point operations of the factorisations and factor updates, summed over all steps
+  /// (counted from the block sizes: |A|^2 b + |A| b^2 + b^3/3 to append b rows to |A|, so |A|^3/3 for
+  /// a factorisation from scratch): the load-independent share of the cost.
+  double total_factor_work() const { return total_factor_work_; }
   /// Friction: rounds of projected Gauss-Seidel sweeps the Newton solve needed, summed over all steps.
   long total_gauss_seidel_rounds() const { return total_gauss_seidel_rounds_; }
   /// Rows of the factorised blocks summed over all factorisations (their mean size: divide by
   /// total_factorizations()).
   long total_factorized_rows() const { return total_factorized_rows_; }
-  /// Rows of the largest factorised block so far.
+  /// Rows of the largest factorised block so far (frictionless: the largest set the updated factor held).
   long largest_factorized_rows() const { return largest_factorized_rows_; }
   /// The step compliance W = B Phi S (B Phi)^T + R (c x c) [m/N].
   const MatrixX& step_compliance() const { return w_; }
@@ -188,6 +213,27 @@ class ReducedIntegrator {
     double modal_strain = 0.0, residual_strain = 0.0, penalty = 0.0;  ///< end-state energies [J]
   };
 
+  /// Cholesky factor \f$L L^T = H_{AA}\f$ of the frictionless step matrix \f$H = K^{-1} + W\f$ over an
+  /// ordered row set A, grown by appending blocks of rows and shrunk by cutting its tail.
+  class ActiveSetFactor {
+   public:
+    Index size() const { return static_cast<Index>(rows_.size()); }
+    const std::vector<Index>& rows() const { return rows_; }
+    void clear() { rows_.clear(); }
+    /// Appends `rows`: `coupling` = H over (rows(), rows), `block` = H over (rows, rows): a triangular
+    /// solve and the Cholesky factor of the Schur complement, O(|A|^2 b + b^3/3) for b rows. False
+    /// (factor unchanged) if the block would not be positive definite.
+    bool append(const std::vector<Index>& rows, const MatrixX& coupling, const MatrixX& block);
+    /// Keeps the first `size` rows (their factor does not depend on the rows after them).
+    void truncate(Index size) { rows_.resize(static_cast<std::size_t>(size)); }
+    /// Solves \f$H_{AA} x = b\f$.
+    VectorX solve(const VectorX& rhs) const;
+
+   private:
+    std::vector<Index> rows_;
+    MatrixX lower_;  ///< capacity x capacity; the leading size() x size() block holds L
+  };
+
   struct CachedFactor {
     std::vector<Index> rows;
     Eigen::LLT<MatrixX> factor;
@@ -195,8 +241,11 @@ class ReducedIntegrator {
   };
 
   bool friction_active() const;
-  void solve_contact(const MatrixX& w, const VectorX& free_gap, bool tangential, CachedFactor* cache);
-  void solve_normal(const MatrixX& w, const VectorX& free_gap, CachedFactor* cache);
+  void solve_normal(const MatrixX& w, const VectorX& free_gap, ActiveSetFactor& factor);
+  /// The step's contact solve on w_ from the free gaps (friction or frictionless, warm-started from p_).
+  void solve_contact(const VectorX& free_gap);
+  /// Swaps w_ and its factors with the end-of-step-force step's (switching_w_ and its factors).
+  void swap_switching_compliance();
   void solve_with_friction(const VectorX& free_gap);
   /// Gaps g(p), the projection P(z(p)) of the trial forces (penalty and return mapping) and its
   /// Jacobian blocks; returns |p - P|_inf [N].
@@ -241,7 +290,8 @@ class ReducedIntegrator {
   VectorX row_compliance_;  ///< friction: 1 / (eps A) per row (the Newton merit's scaling)
   MatrixX w_;
   MatrixX switching_w_;             ///< W + B Phi S (B Phi)^T, formed at the first end-of-step-force step
-  CachedFactor switching_factor_;   ///< its contact factor
+  CachedFactor switching_factor_;   ///< its friction factor
+  ActiveSetFactor switching_normal_factor_;  ///< its frictionless factor
   long switching_steps_ = 0;
   long implicit_switching_steps_ = 0;
   long unconserved_switching_steps_ = 0;
@@ -254,7 +304,8 @@ class ReducedIntegrator {
   VectorX p_, g_;  ///< current pair forces and gaps (also the friction history of the next step)
   VectorX p_old_, g_old_;
   std::vector<PairState> state_;
-  CachedFactor step_factor_;
+  CachedFactor step_factor_;   ///< friction: the stick-only Newton block
+  ActiveSetFactor normal_factor_;  ///< frictionless: H_AA of the step's active set
 
   ReducedEnergy energy_;
   double initial_total_ = 0.0;
@@ -262,6 +313,8 @@ class ReducedIntegrator {
   int last_iterations_ = 0;
   long total_iterations_ = 0;
   long total_factorizations_ = 0;
+  long total_factor_updates_ = 0;
+  double total_factor_work_ = 0.0;
   long total_gauss_seidel_rounds_ = 0;
   long total_factorized_rows_ = 0;
   long largest_factorized_rows_ = 0;

@@ -392,6 +392,33 @@ TEST(ReducedIntegrator, SlidingBlockDeceleratesAtMuNOverM) {
   EXPECT_LT(double(iterations_sliding) / steps_sliding, 1.1);
 }
 
+// The integrator's contact state per pair (as contact::PenaltyContact::pair_state): the pressed block
+// slips (2) until it stops, then sticks (1); released it opens (0); frictionless, closed is 2.
+TEST(ReducedIntegrator, PairStateFollowsTheSolvesStickSlipDecision) {
+  const double mass = 2.0;
+  bool pressed = true;
+  const ReducedSystem system = pressed_block(mass, 0.3, 1e-4);
+  ReducedIntegrator integrator(system, 1e-4, [&pressed](double) { return pressed ? 1.0 : -1.0; });
+  integrator.set_initial_state(VectorX::Zero(1), VectorX::Constant(1, std::sqrt(mass)));  // 1 m/s
+  EXPECT_EQ(integrator.pair_state(0), 1);  // the initial static solve: stuck, no tangential force yet
+  integrator.step();
+  EXPECT_EQ(integrator.pair_state(0), 2);
+  EXPECT_EQ(integrator.n_slipping(), 1);
+  integrator.advance(2000);  // stops at 1 / 7.5 s = 1334 steps
+  EXPECT_EQ(integrator.pair_state(0), 1);
+  EXPECT_EQ(integrator.n_slipping(), 0);
+  pressed = false;
+  integrator.step();
+  EXPECT_EQ(integrator.pair_state(0), 0);
+
+  const ReducedSystem bilinear = bilinear_oscillator(2.0 * kPi, 2e-3, 1e3);
+  ReducedIntegrator frictionless(bilinear, 1e-2, nullptr);
+  frictionless.set_initial_state(VectorX::Constant(1, -1.0), VectorX::Zero(1));
+  EXPECT_EQ(frictionless.pair_state(0), 2);
+  frictionless.set_initial_state(VectorX::Constant(1, 1.0), VectorX::Zero(1));
+  EXPECT_EQ(frictionless.pair_state(0), 0);
+}
+
 TEST(ReducedIntegrator, LinearPartIsStableForAnyStep) {
   Chain chain = make_chain(5, 1000.0, 1.0);
   chain.pair_rows = MatrixX::Zero(0, 5);
