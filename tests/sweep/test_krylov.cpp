@@ -114,6 +114,7 @@ TEST(Krylov, ActionAndPreconditionerOfAClosedCrack) {
   for (Index i = 0; i < c; ++i)
     blocks.push_back({i, 1, -s.normal_penalty * s.pair_area[i] * MatrixX::Identity(2 * harmonics + 1, 2 * harmonics + 1)});
   const KrylovJacobian kj(s, harmonics, modal, blocks, KrylovOptions());
+  EXPECT_EQ(kj.breathing_pairs(), 0);  // no harmonic coupling: the pair blocks have nothing to correct
   const VectorX x = VectorX::LinSpaced(jac.rows(), -1.0, 2.0);
   VectorX y, z;
   kj.apply(x, y);
@@ -149,6 +150,7 @@ TEST(Krylov, PairBlocksInvertTheJacobianOfOnePair) {
       KrylovOptions options;
       options.preconditioner = kind;
       const KrylovJacobian kj(s, harmonics, modal, blocks, options);
+      EXPECT_EQ(kj.breathing_pairs(), kind == KrylovPreconditioner::pair_blocks ? 1 : 0);
       for (Index j = 0; j < n; ++j) {
         unit = VectorX::Unit(n, j);
         kj.apply(unit, column);
