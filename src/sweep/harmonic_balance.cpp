@@ -713,8 +713,10 @@ double HarmonicBalance::memory_bytes(Index rows, Index modes, int harmonics, boo
     // J, its LU and the bordered (n + 1) LU; complex c x c receptances and their Omega derivatives per harmonic
     return 8.0 * (3.0 * n * n + 2.0 * samples) + 16.0 * 2.0 * (harmonics + 1.0) * c * c;
   }
-  // dP/dG blocks, the closing rows' LU and coupling (<= c x c each), the Krylov basis and the vectors
-  return 8.0 * (c * nc * nc + 2.0 * c * c + (krylov.restart + 1.0 + 8.0) * n + 2.0 * samples + 4.0 * c * m);
+  // dP/dG blocks, their deviations from the mean and the breathing pairs' LU (c (2H+1)^2 each), the
+  // closing rows' LU and coupling and the breathing rows' flexibility (<= c x c each), the Krylov basis
+  // and the vectors
+  return 8.0 * (3.0 * c * nc * nc + 3.0 * c * c + (krylov.restart + 1.0 + 8.0) * n + 2.0 * samples + 4.0 * c * m);
 }
 
 Index HarmonicBalance::n_rows() const { return impl_->c; }

@@ -45,7 +45,7 @@ using ComplexMatrixX = Eigen::MatrixXcd;
 enum class LinearSolver {
   automatic,  ///< dense up to HarmonicBalanceOptions::dense_limit unknowns, else krylov
   dense,      ///< J formed (c(2H+1) square) and LU-factorised: fastest for small problems
-  krylov,     ///< matrix-free GMRES with the mean-stiffness preconditioner (krylov.hpp): no square matrix
+  krylov,     ///< matrix-free GMRES with the pair-block preconditioner (krylov.hpp): no square matrix
 };
 
 /// Options of the harmonic-balance solver.

@@ -21,6 +21,18 @@ void set_harmonic(MatrixX& x, int k, const Eigen::VectorXcd& value) {
   x.col(2 * k - 1) = value.real();
   x.col(2 * k) = -value.imag();
 }
+/// The entries of rows d.first .. d.first + d.rows - 1 of a real layout (c rows), indexed as d.block.
+void gather(const VectorX& x, const PairDerivative& d, Index c, VectorX& local) {
+  const Index nc = x.size() / c;
+  local.resize(d.rows * nc);
+  for (Index hc = 0; hc < nc; ++hc)
+    for (int l = 0; l < d.rows; ++l) local[hc * d.rows + l] = x[hc * c + d.first + l];
+}
+void scatter(const VectorX& local, const PairDerivative& d, Index c, VectorX& x) {
+  const Index nc = x.size() / c;
+  for (Index hc = 0; hc < nc; ++hc)
+    for (int l = 0; l < d.rows; ++l) x[hc * c + d.first + l] = local[hc * d.rows + l];
+}
 }  // namespace
 
 GmresReport gmres(const LinearAction& apply, const LinearAction& precondition, const VectorX& b, VectorX& x,
@@ -139,6 +151,58 @@ KrylovJacobian::KrylovJacobian(const reduced::ReducedSystem& system, int harmoni
     Eigen::MatrixXcd a = Eigen::MatrixXcd::Identity(m_, m_) - s.cast<Complex>() * modal_[k].asDiagonal();
     woodbury_[k].compute(a);
   }
+  if (options_.preconditioner == KrylovPreconditioner::pair_blocks) setup_pair_blocks();
+}
+
+void KrylovJacobian::setup_pair_blocks() {
+  const int nc = 2 * H_ + 1;
+  // the breathing pairs: dP/dG other than its harmonic-diagonal mean K (closed for part of the period)
+  for (std::size_t p = 0; p < derivatives_.size(); ++p) {
+    const PairDerivative& d = derivatives_[p];
+    MatrixX deviation = d.block;
+    for (int hc = 0; hc < nc; ++hc)
+      for (int l = 0; l < d.rows; ++l) deviation(hc * d.rows + l, hc * d.rows + l) -= mean_stiffness_[d.first + l];
+    if (deviation.cwiseAbs().maxCoeff() <= 1e-12 * d.block.cwiseAbs().maxCoeff()) continue;
+    breathing_.push_back(p);
+    breathing_offset_.push_back(static_cast<Index>(breathing_rows_.size()));
+    for (int l = 0; l < d.rows; ++l) breathing_rows_.push_back(d.first + l);
+    deviation_.push_back(std::move(deviation));
+  }
+  const Index nb = static_cast<Index>(breathing_rows_.size());
+  if (nb == 0) return;
+  // Z_k = M_k^{-1} H_k = (I - R K)^{-1} R + Y W_k Y^T, W_k = D_k (I - S D_k)^{-1}: its columns of the breathing rows
+  MatrixX columns(c_, nb);
+  for (Index j = 0; j < nb; ++j) columns.col(j) = system_.residual.col(breathing_rows_[j]);
+  flexibility_ = solve_mean(columns);
+  y_breathing_.resize(nb, m_);
+  for (Index j = 0; j < nb; ++j) y_breathing_.row(j) = y_.row(breathing_rows_[j]);
+  modal_flexibility_.resize(H_ + 1);
+  for (int k = 0; k <= H_; ++k) {
+    modal_flexibility_[k] = modal_[k].asDiagonal() * woodbury_[k].inverse();
+    if (k == 0) modal_flexibility_[k] = modal_flexibility_[k].real().cast<Complex>();  // the static receptance
+  }
+  // per breathing pair: I - E_p F_p, F_p = Z_k's diagonal block of the pair (real layout per harmonic)
+  for (std::size_t b = 0; b < breathing_.size(); ++b) {
+    const int r = derivatives_[breathing_[b]].rows;
+    const Index offset = breathing_offset_[b];
+    const MatrixX residual = flexibility_.block(derivatives_[breathing_[b]].first, offset, r, r);
+    const MatrixX modes = y_breathing_.middleRows(offset, r);
+    MatrixX flexibility = MatrixX::Zero(r * nc, r * nc);
+    for (int k = 0; k <= H_; ++k) {
+      const Eigen::MatrixXcd f = residual.cast<Complex>() + modes.cast<Complex>() * modal_flexibility_[k] * modes.transpose();
+      if (k == 0) {
+        flexibility.topLeftCorner(r, r) = f.real();
+        continue;
+      }
+      // (a, b) -> (Re f a + Im f b, -Im f a + Re f b): the real layout of f (a - i b)
+      const Index a = (2 * k - 1) * r, s = 2 * k * r;
+      flexibility.block(a, a, r, r) = f.real();
+      flexibility.block(a, s, r, r) = f.imag();
+      flexibility.block(s, a, r, r) = -f.imag();
+      flexibility.block(s, s, r, r) = f.real();
+    }
+    local_.emplace_back(MatrixX(MatrixX::Identity(r * nc, r * nc) - deviation_[b] * flexibility));
+  }
 }
 
 MatrixX KrylovJacobian::solve_mean(const MatrixX& b) const {
@@ -154,16 +218,12 @@ MatrixX KrylovJacobian::solve_mean(const MatrixX& b) const {
 }
 
 void KrylovJacobian::apply(const VectorX& x, VectorX& y) const {
-  const int nc = 2 * H_ + 1;
   VectorX p = VectorX::Zero(size());
   VectorX local, out;
   for (const PairDerivative& d : derivatives_) {
-    local.resize(static_cast<Index>(d.rows) * nc);
-    for (int hc = 0; hc < nc; ++hc)
-      for (int l = 0; l < d.rows; ++l) local[hc * d.rows + l] = x[hc * c_ + d.first + l];
+    gather(x, d, c_, local);
     out.noalias() = d.block * local;
-    for (int hc = 0; hc < nc; ++hc)
-      for (int l = 0; l < d.rows; ++l) p[hc * c_ + d.first + l] = out[hc * d.rows + l];
+    scatter(out, d, c_, p);
   }
   VectorX g;
   apply_receptance(system_, modal_, p, g);
@@ -171,6 +231,35 @@ void KrylovJacobian::apply(const VectorX& x, VectorX& y) const {
 }
 
 void KrylovJacobian::precondition(const VectorX& x, VectorX& y) const {
+  precondition_mean(x, y);
+  if (breathing_.empty()) return;
+  // J^{-1} = (I - Z E)^{-1} M^{-1} = M^{-1} + Z P (I - E_b P^T Z P)^{-1} E_b P^T M^{-1} (E = dP/dG - K on the
+  // breathing rows P), with P^T Z P replaced by its diagonal blocks F_p
+  const int nc = 2 * H_ + 1;
+  const Index nb = static_cast<Index>(breathing_rows_.size());
+  MatrixX w(nb, nc);
+  VectorX local;
+  for (std::size_t b = 0; b < breathing_.size(); ++b) {
+    const PairDerivative& d = derivatives_[breathing_[b]];
+    gather(y, d, c_, local);
+    local = local_[b].solve(deviation_[b] * local);
+    for (int hc = 0; hc < nc; ++hc)
+      for (int l = 0; l < d.rows; ++l) w(breathing_offset_[b] + l, hc) = local[hc * d.rows + l];
+  }
+  // y += Z_k w per harmonic: the residual part (real, all harmonics at once) and the modal part
+  Eigen::Map<MatrixX> out(y.data(), c_, nc);
+  out.noalias() += flexibility_ * w;
+  const MatrixX t = y_breathing_.transpose() * w;  // Y_b^T w, m x (2H+1)
+  MatrixX v(m_, nc);
+  for (int k = 0; k <= H_; ++k) {
+    Eigen::VectorXcd q = modal_flexibility_[k] * harmonic(t, k);
+    if (k == 0) q = q.real().cast<Complex>();
+    set_harmonic(v, k, q);
+  }
+  out.noalias() += y_ * v;
+}
+
+void KrylovJacobian::precondition_mean(const VectorX& x, VectorX& y) const {
   const int nc = 2 * H_ + 1;
   const MatrixX z = solve_mean(Eigen::Map<const MatrixX>(x.data(), c_, nc));
   const MatrixX t = ku_.transpose() * z;  // (K U)^T z, m x (2H+1)

@@ -6,6 +6,7 @@
 
 #include "cli_testing.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <vector>
@@ -159,6 +160,58 @@ TEST(SweepCommand, HarmonicBalanceMatchesTheReducedAndTheFullTransient) {
     std::printf("  %.4f Hz A2/A1: HB %.5f full explicit %.5f (%+.2e)\n", hz, balance, reference, balance / reference - 1.0);
     EXPECT_NEAR(balance / reference, 1.0, 0.03) << hz << " Hz";
   }
+}
+
+/// sweep.json of the run `name` under scratch().
+nlohmann::json read_sweep_json(const std::string& name) {
+  std::ifstream file(scratch() / name / "sweep.json");
+  return nlohmann::json::parse(file);
+}
+
+TEST(SweepCommand, KrylovSolverMatchesDense) {
+  // the same sweep through f_b/2 with the dense LU and with the matrix-free GMRES (sweep.solver):
+  // the same branch, and sweep.json naming the solver and, for krylov, its GMRES statistics
+  const std::string common = "--modal-cache " + (scratch() / "cache-solvers").string() +
+                             " --set sweep.points=12 --set sweep.frequency.from.ratio=0.48"
+                             " --set sweep.frequency.to.ratio=0.52";
+  std::string output;
+  std::map<std::string, nlohmann::json> runs;
+  for (const char* solver : {"dense", "krylov", "auto"}) {
+    ASSERT_EQ(crackle_sweep(std::string("solver-") + solver, kScene, common + " --set sweep.solver=" + solver, &output), 0)
+        << output;
+    runs[solver] = read_sweep_json(std::string("solver-") + solver);
+    ASSERT_TRUE(runs[solver]["completed"].get<bool>()) << solver;
+  }
+  EXPECT_EQ(runs["dense"]["linear_solver"]["kind"], "dense");
+  EXPECT_EQ(runs["krylov"]["linear_solver"]["kind"], "krylov");
+  // auto: dense below the switch (the cantilever's few pairs x 31 harmonic components < 1500 unknowns)
+  EXPECT_EQ(runs["auto"]["linear_solver"]["kind"], "dense");
+  EXPECT_FALSE(runs["dense"]["linear_solver"].contains("gmres_iterations"));
+  const nlohmann::json& gmres = runs["krylov"]["linear_solver"];
+  const long solves = gmres["gmres_solves"], iterations = gmres["gmres_iterations"];
+  std::printf("  krylov: %ld GMRES solves, %ld iterations (at most %d per solve), %ld preconditioner factors\n", solves,
+              iterations, gmres["gmres_max_iterations"].get<int>(), gmres["preconditioner_factors"].get<long>());
+  EXPECT_GE(solves, runs["krylov"]["points"].get<long>());  // at least one Newton step per point
+  EXPECT_GE(iterations, solves);
+  EXPECT_GT(gmres["gmres_max_iterations"].get<int>(), 0);
+  EXPECT_GT(gmres["preconditioner_factors"].get<long>(), 0);
+  EXPECT_EQ(gmres["gmres_unconverged"].get<long>(), 0);
+  // the same points, amplitudes within 1e-6 relative (the Newton tolerance on the small orders)
+  const auto dense = read_csv(scratch() / "solver-dense" / "sweep.csv");
+  const auto krylov = read_csv(scratch() / "solver-krylov" / "sweep.csv");
+  const std::vector<double>& hz = dense.at("excitation frequency [Hz]");
+  ASSERT_EQ(krylov.at("excitation frequency [Hz]").size(), hz.size());
+  double worst = 0.0;
+  for (std::size_t i = 0; i < hz.size(); ++i) {
+    EXPECT_NEAR(krylov.at("excitation frequency [Hz]")[i] / hz[i], 1.0, 1e-9) << i;
+    for (const char* order : {"A1", "A2", "A3"}) {
+      const std::string column = std::string("tip u_z ") + order + " [m]";
+      const double difference = std::abs(krylov.at(column)[i] / dense.at(column)[i] - 1.0);
+      worst = std::max(worst, difference);
+      EXPECT_LT(difference, 1e-6) << hz[i] << " Hz " << order;
+    }
+  }
+  std::printf("  %zu points, A1..A3 of krylov within %.2e of dense\n", hz.size(), worst);
 }
 
 TEST(SweepCommand, BadSweepKeysGiveFileAndLine) {

@@ -114,12 +114,59 @@ TEST(Krylov, ActionAndPreconditionerOfAClosedCrack) {
   for (Index i = 0; i < c; ++i)
     blocks.push_back({i, 1, -s.normal_penalty * s.pair_area[i] * MatrixX::Identity(2 * harmonics + 1, 2 * harmonics + 1)});
   const KrylovJacobian kj(s, harmonics, modal, blocks, KrylovOptions());
+  EXPECT_EQ(kj.breathing_pairs(), 0);  // no harmonic coupling: the pair blocks have nothing to correct
   const VectorX x = VectorX::LinSpaced(jac.rows(), -1.0, 2.0);
   VectorX y, z;
   kj.apply(x, y);
   EXPECT_LT(relative_difference(y, jac * x), 1e-12);
   kj.precondition(y, z);
   EXPECT_LT(relative_difference(z, x), 1e-10);
+}
+
+TEST(Krylov, PairBlocksInvertTheJacobianOfOnePair) {
+  // one pair (normal only, then normal and tangential rows): J is its own pair block, so the pair-block
+  // preconditioners are J's exact inverse (the mean stiffness alone is not: the block couples harmonics)
+  const int harmonics = 4;
+  const int nc = 2 * harmonics + 1;
+  std::mt19937 random(7);
+  std::normal_distribution<double> normal;
+  for (const int rows : {1, 3}) {
+    auto s = crack_system(4, rows, 0.0, 20.0, 0.02);
+    const double omega = 0.7;
+    std::vector<Eigen::VectorXcd> modal(harmonics + 1, Eigen::VectorXcd(4));
+    for (int k = 0; k <= harmonics; ++k)
+      for (Index r = 0; r < 4; ++r) {
+        const double w = s.omega[r], wk = k * omega, zeta = s.damping_ratio(r);
+        modal[k][r] = 1.0 / std::complex<double>(w * w - wk * wk, 2.0 * zeta * w * wk);
+      }
+    // a slope of a pair closed for part of the period: a stiff mean plus harmonic coupling
+    MatrixX block = MatrixX::NullaryExpr(rows * nc, rows * nc, [&](Index, Index) { return normal(random); });
+    block = -s.normal_penalty * s.pair_area[0] * (0.5 * MatrixX::Identity(rows * nc, rows * nc) + 0.2 * block);
+    const std::vector<PairDerivative> blocks = {{0, rows, block}};
+    const Index n = rows * nc;
+    MatrixX jac(n, n);
+    VectorX unit, column;
+    for (const auto kind : {KrylovPreconditioner::mean_stiffness, KrylovPreconditioner::pair_blocks}) {
+      KrylovOptions options;
+      options.preconditioner = kind;
+      const KrylovJacobian kj(s, harmonics, modal, blocks, options);
+      EXPECT_EQ(kj.breathing_pairs(), kind == KrylovPreconditioner::pair_blocks ? 1 : 0);
+      for (Index j = 0; j < n; ++j) {
+        unit = VectorX::Unit(n, j);
+        kj.apply(unit, column);
+        jac.col(j) = column;
+      }
+      const VectorX x = VectorX::LinSpaced(n, -1.0, 2.0);
+      VectorX z;
+      kj.precondition(jac * x, z);
+      const double error = relative_difference(z, x);
+      std::printf("  %d row(s), preconditioner %d: |M^-1 J x - x| / |x| = %.2e\n", rows, int(kind), error);
+      if (kind == KrylovPreconditioner::mean_stiffness)
+        EXPECT_GT(error, 1e-3);
+      else
+        EXPECT_LT(error, 1e-10);
+    }
+  }
 }
 
 TEST(Krylov, BreathingPointAgreesWithDense) {
@@ -144,9 +191,18 @@ TEST(Krylov, BreathingPointAgreesWithDense) {
   const auto lin = krylov.linearize(omega, guess, false);
   const VectorX x_krylov = lin->solve(b, 1e-13);
   const long linear_iterations = krylov.krylov_statistics().iterations;
-  std::printf("  one solve to 1e-13 at the linear guess: %ld GMRES iterations\n", linear_iterations);
+  // the same solve with the mean stiffness alone (the pair blocks' harmonic coupling left out)
+  HarmonicBalanceOptions mean_options = solver_options(LinearSolver::krylov, harmonics);
+  mean_options.krylov.preconditioner = KrylovPreconditioner::mean_stiffness;
+  const HarmonicBalance mean(s, mean_options);
+  const VectorX x_mean = mean.linearize(omega, guess, false)->solve(b, 1e-13);
+  const long mean_iterations = mean.krylov_statistics().iterations;
+  std::printf("  one solve to 1e-13 at the linear guess: %ld GMRES iterations (%ld with the mean stiffness alone)\n",
+              linear_iterations, mean_iterations);
   EXPECT_LE(linear_iterations, 500);
+  EXPECT_LT(linear_iterations, mean_iterations);
   EXPECT_LT(relative_difference(x_krylov, x_dense), 1e-10);
+  EXPECT_LT(relative_difference(x_mean, x_dense), 1e-10);
 
   const Solution a = dense.solve(omega);
   const Solution k = krylov.solve(omega);
