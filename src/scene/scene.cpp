@@ -364,7 +364,8 @@ Param build_parameters() {
                              "that did not settle).").at_least(2).defaults_to("2000"),
       choice("solver", "harmonic_balance's linear solves: dense (the Jacobian of pairs x (2H+1) unknowns "
                        "formed and LU-factorised, cost ~ unknowns^3), krylov (matrix-free GMRES preconditioned "
-                       "by the mean contact stiffness, no square matrix), auto (dense up to 1500 unknowns).",
+                       "by the mean contact stiffness and each breathing pair's harmonic block, no square "
+                       "matrix), auto (dense up to 1500 unknowns).",
              {"auto", "dense", "krylov"}).defaults_to("auto"),
     }).optional_section(),
   });
