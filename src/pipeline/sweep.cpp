@@ -537,6 +537,10 @@ nlohmann::json sweep_json(const SweepResult& result, const SweepSettings& settin
     if (result.linear_solver == "krylov")
       linear.update({{"gmres_solves", result.krylov.solves}, {"gmres_iterations", result.krylov.iterations},
                      {"gmres_max_iterations", result.krylov.max_iterations},
+                     {"preconditioner", sweep::KrylovOptions{}.preconditioner ==
+                                                sweep::KrylovPreconditioner::pair_blocks
+                                            ? "mean_stiffness+pair_blocks"
+                                            : "mean_stiffness"},
                      {"preconditioner_factors", result.krylov.factorisations},
                      {"gmres_unconverged", result.krylov.unconverged}});
     document["linear_solver"] = linear;

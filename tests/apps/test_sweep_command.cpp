@@ -187,6 +187,7 @@ TEST(SweepCommand, KrylovSolverMatchesDense) {
   // auto: dense below the switch (the cantilever's few pairs x 31 harmonic components < 1500 unknowns)
   EXPECT_EQ(runs["auto"]["linear_solver"]["kind"], "dense");
   EXPECT_FALSE(runs["dense"]["linear_solver"].contains("gmres_iterations"));
+  EXPECT_EQ(runs["krylov"]["linear_solver"]["preconditioner"], "mean_stiffness+pair_blocks");
   const nlohmann::json& gmres = runs["krylov"]["linear_solver"];
   const long solves = gmres["gmres_solves"], iterations = gmres["gmres_iterations"];
   std::printf("  krylov: %ld GMRES solves, %ld iterations (at most %d per solve), %ld preconditioner factors\n", solves,
