@@ -267,7 +267,7 @@ double ReducedIntegrator::friction_map(const VectorX& p, const VectorX& free_gap
   const double mu = system_.friction_coefficient;
   gap = free_gap;
   const std::vector<Index> loaded = nonzero_rows(p);
-  if (!loaded.empty()) gap.noalias() += w_(Eigen::all, loaded) * p(loaded);
+  for (const Index row : loaded) gap.noalias() += p[row] * w_.col(row);
   projected.setZero(p.size());
   jacobians.assign(n, FrictionJacobian{});
   double residual = 0.0;
@@ -437,9 +437,9 @@ void ReducedIntegrator::friction_gauss_seidel(const VectorX& free_gap, int sweep
       const double limit = mu * p[r];
       Eigen::Vector2d force = old_force - block.ldlt().solve(gradient);
       if (force.norm() > limit) {
-        const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(block, Eigen::EigenvaluesOnly)
-                                   .eigenvalues()
-                                   .maxCoeff();
+        // The larger eigenvalue of the symmetric 2 x 2 block, in closed form.
+        const double mean = 0.5 * (block(0, 0) + block(1, 1)), half = 0.5 * (block(0, 0) - block(1, 1));
+        const double largest = mean + std::hypot(half, block(0, 1));
         force = old_force - gradient / largest;
         const double norm = force.norm();
         if (norm > limit) force *= norm > 0.0 ? limit / norm : 0.0;
