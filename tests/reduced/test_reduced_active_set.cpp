@@ -17,6 +17,7 @@
 #include "fem/material.hpp"
 #include "fem/system.hpp"
 #include "mesh/box.hpp"
+#include "delaminated_plate.hpp"
 #include "reduced/integrator.hpp"
 #include "reduced/reduction.hpp"
 
@@ -119,26 +120,9 @@ Comparison compare_with_reference(ReducedIntegrator& integrator, const ReducedSy
 // steps follow the highest retained mode, so with few modes they are long: the free gaps of most of
 // the delamination go negative in a closing step while the final set is a few pairs near the tip.
 TEST(ReducedActiveSet, PlateWithLongStepsMatchesTheDenseActiveSetForLessWork) {
-  mesh::BoxSpec box;
-  box.size = Vec3(0.2, 0.2, 0.01);
-  box.cells = {16, 16, 2};
-  mesh::CrackSpec crack;
-  crack.normal = kZ;
-  crack.at = 0.005;
-  crack.region = {{{0.1, 0.2}, {0.0, 0.2}, {0.0, 0.0}}};
-  const mesh::Mesh mesh = mesh::build_box_mesh(box, crack);
-  const fem::Materials materials = {fem::isotropic(210e9, 0.3, 7850.0)};
-  const std::vector<fem::DirichletCondition> clamp = {{mesh.node_sets.at("x-"), {0, 1, 2}, {0.0, 0.0, 0.0}, "x-"}};
-  const fem::System system(mesh, materials, clamp, mesh::Variant::open);
-  std::vector<Index> tip_top;
-  for (Index node = 0; node < mesh.n_nodes(); ++node)
-    if (mesh.nodes[node].x() > 0.2 - 1e-9 && mesh.nodes[node].z() > 0.01 - 1e-9) tip_top.push_back(node);
-  const fem::LoadShape load = system.load_shape({"pull", tip_top, {}, Vec3(0.0, 0.0, 1.0)});
-  ReductionOptions options;
-  options.modes = 10;
-  const Reduction reduction = compute_reduction(system, options, {}, load);
-  ReducedSystem reduced = reduced_system(reduction, 10, 1.0);
-  reduced.normal_penalty = contact::choose_penalty(mesh, materials, contact::ContactOptions{}).normal_penalty;
+  const testing::DelaminatedPlate plate = testing::delaminated_plate(16, 10);
+  ReducedSystem reduced = reduced_system(plate.reduction, 10, 1.0);
+  reduced.normal_penalty = plate.penalty.normal_penalty;
   ASSERT_EQ(reduced.n_pairs(), 136);
 
   const int steps_per_period = 200;

@@ -15,6 +15,7 @@
 #include "fem/material.hpp"
 #include "fem/system.hpp"
 #include "mesh/box.hpp"
+#include "delaminated_plate.hpp"
 #include "reduced/integrator.hpp"
 #include "reduced/reduction.hpp"
 
@@ -170,29 +171,11 @@ TEST(ReductionFriction, SlidingBlockDeceleratesAtMuNOverMAsInTheFullModel) {
 // mapping (eq. 15) of the step's tangential increment, recomputed here by contact::coulomb_return_mapping
 // (relative to the largest pair force; the solver stops at 1e-9).
 TEST(ReductionFriction, ManyCoupledPairsSatisfyThePenaltyAndCoulombAtEveryPairAndStep) {
-  mesh::BoxSpec box;
-  box.size = Vec3(0.2, 0.2, 0.01);
-  box.cells = {8, 8, 2};
-  mesh::CrackSpec crack;
-  crack.normal = kZ;
-  crack.at = 0.005;
-  crack.region = {{{0.1, 0.2}, {0.0, 0.2}, {0.0, 0.0}}};
-  const mesh::Mesh mesh = mesh::build_box_mesh(box, crack);
-  const fem::Materials materials = {fem::isotropic(210e9, 0.3, 7850.0)};
-  const std::vector<fem::DirichletCondition> clamp = {{mesh.node_sets.at("x-"), {0, 1, 2}, {0.0, 0.0, 0.0}, "x-"}};
-  const fem::System system(mesh, materials, clamp, mesh::Variant::open);
-  std::vector<Index> tip_top;
-  for (Index node = 0; node < mesh.n_nodes(); ++node)
-    if (mesh.nodes[node].x() > 0.2 - 1e-9 && mesh.nodes[node].z() > 0.01 - 1e-9) tip_top.push_back(node);
-  const fem::LoadShape load = system.load_shape({"push", tip_top, {}, Vec3(0.0, 0.0, 1.0)});
-  ReductionOptions options;
-  options.modes = 20;
-  options.friction = true;
-  const Reduction reduction = compute_reduction(system, options, {}, load);
   contact::ContactOptions contact;
   contact.friction_coefficient = kFriction;
-  const contact::PenaltyChoice penalty = contact::choose_penalty(mesh, materials, contact);
-  ReducedSystem reduced = reduced_system(reduction, 20, 1e3);
+  const testing::DelaminatedPlate plate = testing::delaminated_plate(8, 20, contact);
+  const contact::PenaltyChoice& penalty = plate.penalty;
+  ReducedSystem reduced = reduced_system(plate.reduction, 20, 1e3);
   reduced.normal_penalty = penalty.normal_penalty;
   reduced.tangential_penalty = penalty.tangential_penalty;
   reduced.friction_coefficient = kFriction;

@@ -1,0 +1,44 @@
+#pragma once
+/// bench_reduced's body for the reduced-model tests: a steel plate 0.2 x 0.2 x 0.01 m clamped on x-,
+/// n x n x 2 cells of p = 1, with a mid-plane delamination (z = 0.005) over its free half
+/// x in [0.1, 0.2] ((n/2)(n + 1) split pairs), reduced with a unit z load on the free end's top edge.
+#include <vector>
+
+#include "contact/contact.hpp"
+#include "fem/material.hpp"
+#include "fem/system.hpp"
+#include "mesh/box.hpp"
+#include "reduced/reduction.hpp"
+
+namespace crackle::reduced::testing {
+
+/// The plate's reduction (`modes` open modes; 3 rows per pair with `contact.friction_coefficient` > 0)
+/// and the automatic penalties for `contact`.
+struct DelaminatedPlate {
+  Reduction reduction;
+  contact::PenaltyChoice penalty;
+};
+
+inline DelaminatedPlate delaminated_plate(int cells, int modes, const contact::ContactOptions& contact = {}) {
+  mesh::BoxSpec box;
+  box.size = Vec3(0.2, 0.2, 0.01);
+  box.cells = {cells, cells, 2};
+  mesh::CrackSpec crack;
+  crack.normal = kZ;
+  crack.at = 0.005;
+  crack.region = {{{0.1, 0.2}, {0.0, 0.2}, {0.0, 0.0}}};
+  const mesh::Mesh mesh = mesh::build_box_mesh(box, crack);
+  const fem::Materials materials = {fem::isotropic(210e9, 0.3, 7850.0)};
+  const std::vector<fem::DirichletCondition> clamp = {{mesh.node_sets.at("x-"), {0, 1, 2}, {0.0, 0.0, 0.0}, "x-"}};
+  const fem::System system(mesh, materials, clamp, mesh::Variant::open);
+  std::vector<Index> tip_top;
+  for (Index node = 0; node < mesh.n_nodes(); ++node)
+    if (mesh.nodes[node].x() > 0.2 - 1e-9 && mesh.nodes[node].z() > 0.01 - 1e-9) tip_top.push_back(node);
+  const fem::LoadShape load = system.load_shape({"tip", tip_top, {}, Vec3(0.0, 0.0, 1.0)});
+  ReductionOptions options;
+  options.modes = modes;
+  options.friction = contact.friction_coefficient > 0.0;
+  return {compute_reduction(system, options, {}, load), contact::choose_penalty(mesh, materials, contact)};
+}
+
+}  // namespace crackle::reduced::testing
