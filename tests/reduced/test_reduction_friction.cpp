@@ -185,8 +185,8 @@ TEST(ReductionFriction, ManyCoupledPairsSatisfyThePenaltyAndCoulombAtEveryPairAn
   const int steps_per_period = 200;
   const double h = reduced_time_step(reduced, 0.0), frequency = 1.0 / (steps_per_period * h);
   const auto force = [frequency](double t) { return std::sin(2.0 * 3.14159265358979 * frequency * t); };
-  // The same run frictionless: its energy error is the impacts' (the massless boundary closing within a
-  // step, O(h^2)); friction must add none (its dissipation is exact per step).
+  // The same run frictionless: its energy error is round-off (the switching steps conserve energy);
+  // friction must add none (its dissipation is exact per step).
   ReducedSystem frictionless = reduced;
   frictionless.friction_coefficient = 0.0;
   ReducedIntegrator reference(frictionless, h, force);
