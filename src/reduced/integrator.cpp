@@ -600,6 +600,11 @@ void ReducedIntegrator::step() {
   energy_.residual_strain = trial.residual_strain;
   energy_.penalty = trial.penalty;
   update_energy_scale();
+  if (options_.energy_tolerance > 0.0 && energy_error() > options_.energy_tolerance)
+    throw SolverError("reduced integrator: energy balance error " + format_number(energy_error()) +
+                      " exceeds " + format_number(options_.energy_tolerance) + " at step " +
+                      std::to_string(step_count_) + " (t = " + format_number(time_) + " s, h = " +
+                      format_number(time_step_) + " s): take more steps per period");
 }
 
 bool ReducedIntegrator::closed_set_changed() const {

@@ -75,6 +75,10 @@ struct ReducedIntegratorOptions {
   /// force, which gains energy without bound when the closed system's stiffest frequencies are not
   /// resolved by the step (kept to show exactly that in the tests).
   bool conserve_switching_energy = true;
+  /// Relative energy-balance error (energy_error()) above which step() throws SolverError instead of
+  /// going on with a wrong state: the full model's guard (transient::TransientOptions::energy_tolerance).
+  /// 0 turns the check off.
+  double energy_tolerance = 0.05;
 };
 
 /// Time integrator of a ReducedSystem. Borrows the system: it must outlive the integrator.
@@ -125,7 +129,7 @@ class ReducedIntegrator {
   void set_initial_state(const VectorX& modal_displacement, const VectorX& modal_velocity, double time = 0.0);
 
   /// Advances one step h. Throws SolverError (naming step and time) if the contact solve does not
-  /// converge or the state is not finite.
+  /// converge, the state is not finite or the energy balance fails (options' energy_tolerance).
   void step();
   /// Advances `n_steps` steps.
   void advance(Index n_steps);

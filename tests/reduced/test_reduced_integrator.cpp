@@ -4,6 +4,7 @@
 #include <Eigen/LU>
 #include <cmath>
 #include <complex>
+#include <string>
 #include <vector>
 
 #include "core/errors.hpp"
@@ -272,9 +273,10 @@ struct SwitchingRun {
   long switching_steps = 0, implicit = 0, unconserved = 0;
   Index transitions = 0;
   bool finished = true;
+  std::string failure;  ///< the SolverError's message, if one stopped the run
 };
 
-SwitchingRun stiff_chattering(bool conserve, double periods) {
+SwitchingRun stiff_chattering(bool conserve, double periods, bool guarded = false) {
   Chain chain = make_chain(60, 1000.0, 1.0);
   chain.pair_rows = MatrixX::Zero(5, 60);
   for (int k = 0; k < 5; ++k) chain.pair_rows(k, 10 * k + 9) = 1.0;
@@ -287,6 +289,7 @@ SwitchingRun stiff_chattering(bool conserve, double periods) {
   run.closed_over_highest = reduced_closed_max_frequency(system) / highest;
   ReducedIntegratorOptions options;
   options.conserve_switching_energy = conserve;
+  if (!conserve && !guarded) options.energy_tolerance = 0.0;  // let the plain force's growth show
   ReducedIntegrator integrator(system, reduced_time_step(system, 0.0, 40), nullptr, options);
   VectorX velocity = VectorX::Zero(20);
   velocity[0] = 0.1;
@@ -303,8 +306,9 @@ SwitchingRun stiff_chattering(bool conserve, double periods) {
       run.worst_energy_error = std::max(run.worst_energy_error, integrator.energy_error());
       if (run.worst_energy_error > 1.0) break;  // blown up: enough seen
     }
-  } catch (const SolverError&) {
-    run.finished = false;  // the state left the finite numbers
+  } catch (const SolverError& error) {
+    run.finished = false;  // the state left the finite numbers, or the energy guard stopped it
+    run.failure = error.what();
     run.worst_energy_error = std::max(run.worst_energy_error, 1.0);
   }
   run.switching_steps = integrator.switching_steps();
@@ -327,6 +331,15 @@ TEST(ReducedIntegrator, UnresolvedSwitchingStepsConserveEnergyInsteadOfGainingIt
   EXPECT_GT(plain.worst_energy_error, 0.05);   // the plain trapezoidal contact force gains energy
   EXPECT_LT(conserved.worst_energy_error, 1e-3);
   EXPECT_EQ(conserved.unconserved, 0);
+}
+
+TEST(ReducedIntegrator, AFailingEnergyBalanceStopsTheRunInsteadOfGoingOn) {
+  // The plain trapezoidal force of the test above with the default guard (energy_tolerance 0.05).
+  const SwitchingRun guarded = stiff_chattering(false, 300.0, true);
+  std::printf("%s\n", guarded.failure.c_str());
+  EXPECT_FALSE(guarded.finished);
+  EXPECT_NE(guarded.failure.find("energy balance error"), std::string::npos);
+  EXPECT_NE(guarded.failure.find("at step"), std::string::npos);
 }
 
 /// A block of mass m on one rigid mode (x = q / sqrt(m)), pressed by a load through the massless
