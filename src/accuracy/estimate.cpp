@@ -1,0 +1,130 @@
+#include "accuracy/estimate.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace crackle::accuracy {
+namespace {
+
+double relative(double change, double value) {
+  const double scale = std::abs(value);
+  return scale > 0.0 ? change / scale : (change == 0.0 ? 0.0 : std::copysign(HUGE_VAL, change));
+}
+
+std::string number(double value, int digits) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.*g", digits, value);
+  return text;
+}
+
+}  // namespace
+
+Component three_level(const std::string& name, double q1, double q2, double q3, double ratio, double order_min,
+                      double order_max) {
+  Component component;
+  component.name = name;
+  component.value = q3;
+  component.refined = q3;
+  const double e21 = q2 - q1, e32 = q3 - q2;
+  if (e21 == 0.0 && e32 == 0.0) {
+    component.delta = 0.0;
+    return component;
+  }
+  const double levels_ratio = e21 / e32;  // (Q1 - Q2) / (Q2 - Q3)
+  component.ratio = std::isfinite(levels_ratio) ? levels_ratio : 0.0;
+  auto cautious = [&](const std::string& reason) {
+    component.safety_factor = kCautiousSafetyFactor;
+    component.delta = kCautiousSafetyFactor * relative(e32, q3);
+    component.asymptotic = false;
+    component.verified = false;
+    component.reason = reason;
+    return component;
+  };
+  if (!std::isfinite(levels_ratio) || levels_ratio <= 0.0) {
+    return cautious("non-monotone refinement ((Q1 - Q2)/(Q2 - Q3) = " + number(levels_ratio, 3) + ")");
+  }
+  if (levels_ratio <= 1.0) {
+    return cautious("not converging (the change grows from level to level: ratio " + number(levels_ratio, 3) + ")");
+  }
+  const double order = std::log(levels_ratio) / std::log(ratio);
+  component.observed_order = order;
+  const double correction = e32 / (levels_ratio - 1.0);  // Q_ext - Q3 (eq. 2)
+  if (order < order_min || order > order_max) {
+    component.safety_factor = kCautiousSafetyFactor;
+    component.asymptotic = false;
+    component.reason = "observed order " + number(order, 3) + " outside [" + number(order_min, 3) + ", " +
+                       number(order_max, 3) + "]";
+    if (order < 0.5 * order_min || order > 2.0 * order_max) component.verified = false;
+  }
+  component.delta = component.safety_factor * relative(correction, q3);
+  return component;
+}
+
+Component one_refinement(const std::string& name, double value, double refined, double refinement, double order) {
+  Component component;
+  component.name = name;
+  component.value = value;
+  component.refined = refined;
+  const double change = refined - value;
+  if (order > 0.0 && refinement > 1.0) {
+    const double rp = std::pow(refinement, order);
+    component.observed_order = 0.0;
+    component.delta = kSafetyFactor * relative(change * rp / (rp - 1.0), value);
+  } else {
+    component.safety_factor = kCautiousSafetyFactor;
+    component.delta = kCautiousSafetyFactor * relative(change, value);
+  }
+  return component;
+}
+
+Component residue(const std::string& name, double value, double relative_residue) {
+  Component component;
+  component.name = name;
+  component.value = value;
+  component.refined = value;
+  component.safety_factor = 1.0;
+  component.delta = relative_residue;
+  return component;
+}
+
+Estimate combine(const std::string& quantity, double value, std::vector<Component> components) {
+  Estimate estimate;
+  estimate.quantity = quantity;
+  estimate.value = value;
+  double squares = 0.0;
+  for (const Component& component : components) {
+    estimate.sum += std::abs(component.delta);
+    squares += component.delta * component.delta;
+    estimate.asymptotic = estimate.asymptotic && component.asymptotic;
+    estimate.verified = estimate.verified && component.verified;
+    if (!component.reason.empty() && !component.verified) estimate.reasons.push_back(component.name + ": " + component.reason);
+  }
+  estimate.rss = std::sqrt(squares);
+  estimate.components = std::move(components);
+  return estimate;
+}
+
+std::string estimate_line(const Estimate& estimate) {
+  std::ostringstream line;
+  line << estimate.quantity << " = " << number(estimate.value, 5) << " ± " << number(100.0 * estimate.sum, 2) << " %";
+  if (!estimate.components.empty()) {
+    line << " (";
+    for (std::size_t i = 0; i < estimate.components.size(); ++i) {
+      const Component& component = estimate.components[i];
+      line << (i ? ", " : "") << component.name << " " << number(100.0 * std::abs(component.delta), 2);
+    }
+    line << ")";
+  }
+  if (!estimate.verified) {
+    line << ", not verified:";
+    for (const std::string& reason : estimate.reasons) line << " " << reason << ";";
+    std::string text = line.str();
+    text.pop_back();
+    return text;
+  }
+  if (!estimate.asymptotic) line << ", not asymptotic";
+  return line.str();
+}
+
+}  // namespace crackle::accuracy

@@ -1,0 +1,65 @@
+#pragma once
+/// \file Error estimates of computed quantities by refinement (DETECTION.md sec. 1): Richardson
+/// extrapolation with the observed order over three levels (eqs. 1-3), a one-refinement estimate
+/// with a known order (time step, penalty) or none (modal truncation), and the sum of the
+/// components. Pure numerics on numbers: which runs make the levels is the caller's business.
+#include <string>
+#include <vector>
+
+namespace crackle::accuracy {
+
+/// Safety factors of the grid convergence index (Roache; Celik et al. 2008): three levels with a
+/// sane observed order, and everything else (two levels, an order out of range).
+inline constexpr double kSafetyFactor = 1.25;
+inline constexpr double kCautiousSafetyFactor = 3.0;
+
+/// One error component of one quantity: the estimated error of the value that was run.
+struct Component {
+  std::string name;           ///< "mesh", "modes", "steps", "penalty", "window"
+  double value = 0.0;         ///< the quantity as run
+  double refined = 0.0;       ///< the quantity at the (finest) refinement
+  double delta = 0.0;         ///< signed relative error estimate of `value`: (Q_true - value) / |value|, times Fs
+  double safety_factor = kSafetyFactor;
+  double observed_order = 0.0;  ///< 0: not observed (two levels)
+  double ratio = 0.0;         ///< (Q1 - Q2) / (Q2 - Q3) of three levels (0: two levels)
+  bool asymptotic = true;     ///< the levels look asymptotic (three levels: order in range)
+  bool verified = true;       ///< false: the estimate cannot be trusted (see reason)
+  std::string reason;         ///< why not verified or not asymptotic
+};
+
+/// Three levels of a refinement with constant ratio r (coarse Q1, Q2, fine Q3 = the value that was
+/// run): observed order (eq. 1), extrapolated value (eq. 2) and the GCI (eq. 3) as a signed error of
+/// Q3. `order_range` is the sane range of the observed order; outside it, or for a non-monotone
+/// sequence ((Q1 - Q2)/(Q2 - Q3) <= 0), the component is not verified and Fs = 3 is used with the
+/// change between the two finest levels.
+Component three_level(const std::string& name, double q1, double q2, double q3, double ratio,
+                      double order_min, double order_max);
+
+/// One refinement from the setting that was run (value) to a finer one (refined) whose error is
+/// expected to fall as refinement^-order: the error of `value` is (refined - value) r^p / (r^p - 1).
+/// order <= 0: the convergence order is unknown (modal truncation): the change itself, times Fs = 3.
+Component one_refinement(const std::string& name, double value, double refined, double refinement, double order);
+
+/// A component given directly as a relative residue (the steady-state window change).
+Component residue(const std::string& name, double value, double relative);
+
+/// The components of one quantity, added up.
+struct Estimate {
+  std::string quantity;  ///< "A2/A1", "f_b", ...
+  double value = 0.0;
+  std::vector<Component> components;
+  double sum = 0.0;  ///< sum of |delta| (conservative)
+  double rss = 0.0;  ///< root-sum-square of delta
+  bool asymptotic = true;
+  bool verified = true;
+  std::vector<std::string> reasons;  ///< why not verified (the components that are not)
+};
+
+/// Sum and root-sum-square of the components; verified and asymptotic only when every component is.
+Estimate combine(const std::string& quantity, double value, std::vector<Component> components);
+
+/// One line: `A2/A1 = 0.1547 ± 0.6 % (mesh 0.5, modes 0.2, steps 0.1, penalty 0.1)`, with
+/// `not verified: reason` appended when it is not.
+std::string estimate_line(const Estimate& estimate);
+
+}  // namespace crackle::accuracy
