@@ -134,7 +134,7 @@ void remove_earlier(const fs::path& directory, const std::string& command, const
   std::error_code error;
   for (const std::vector<std::string>* names : {&listing.temporary, &listing.own}) {
     for (const std::string& name : *names) {
-      fs::remove(directory / name, error);
+      fs::remove_all(directory / name, error);  // a temporary may be a folder (accuracy.tmp.PID)
       if (error) throw IoError((directory / name).string() + ": cannot remove (" + error.message() + ")");
     }
   }

@@ -22,6 +22,9 @@
 #include "pipeline/stages.hpp"
 #include "reduced/integrator.hpp"
 #include "pipeline/output_folder.hpp"
+#include "pipeline/accuracy.hpp"
+#include "pipeline/route.hpp"
+#include "pipeline/run_scene.hpp"
 #include "modal/modal.hpp"
 #include "spectral/harmonics.hpp"
 #include "spectral/plot.hpp"
@@ -494,8 +497,10 @@ class SpectrumMonitor {
     return verdict.settled;
   }
 
-  /// Stage 3: closes the records, writes spectrum.json, the spectra and the plots.
-  void write(const scene::Scene& scene, const std::filesystem::path& directory, double dt, std::ostream& out);
+  /// Stage 3: closes the records, writes the spectra and the plots; returns spectrum.json's content
+  /// (written by the command once the accuracy is known) and the probes' signatures.
+  nlohmann::json write(const scene::Scene& scene, const std::filesystem::path& directory, double dt,
+                       std::vector<ProbeSignature>& signatures, std::ostream& out);
 
  private:
   double dt_ = 0.0;
@@ -511,8 +516,14 @@ class SpectrumMonitor {
   std::vector<ProbeSpectrum> probes_;
 };
 
-void SpectrumMonitor::write(const scene::Scene& scene, const std::filesystem::path& directory, double dt,
-                            std::ostream& out) {
+/// A1 and the ratios of a table, in ProbeSignature's order.
+std::array<double, 4> signature_values(const spectral::HarmonicTable& table) {
+  const spectral::DamageIndices indices = spectral::damage_indices(table);
+  return {table.amplitude(1), indices.a2_over_a1, indices.a3_over_a1, indices.a_half_over_a1};
+}
+
+nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::filesystem::path& directory, double dt,
+                                      std::vector<ProbeSignature>& signatures, std::ostream& out) {
   const double frequency = options_.excitation_frequency_hz;
   nlohmann::json spectrum_json = {{"excitation_hz", frequency}, {"amplitude_convention",
                                   "peak amplitude A_k of x(t) = A_0 + sum A_k cos(2 pi k f t + phi_k), t from the start of the run"}};
@@ -535,6 +546,18 @@ void SpectrumMonitor::write(const scene::Scene& scene, const std::filesystem::pa
     const ProbeSpectrum& probe = probes_[p];
     const spectral::HarmonicTable table = probe.accumulator->last_table(used);
     probes_json[probe.name] = spectral::probe_json(probe.label, table);
+    ProbeSignature signature;
+    signature.name = probe.name;
+    signature.value = signature_values(table);
+    signature.previous_window.fill(std::numeric_limits<double>::quiet_NaN());
+    signature.window_before.fill(std::numeric_limits<double>::quiet_NaN());
+    if (periods >= 2 * used) {
+      signature.previous_window = signature_values(probe.accumulator->table(periods - 2 * used, used));
+    }
+    if (periods >= 3 * used) {
+      signature.window_before = signature_values(probe.accumulator->table(periods - 3 * used, used));
+    }
+    signatures.push_back(signature);
     const std::vector<double>& values = probe.values;
     spectral::SpectrumOptions spectrum_options;
     spectrum_options.excitation_frequency_hz = frequency;
@@ -558,7 +581,7 @@ void SpectrumMonitor::write(const scene::Scene& scene, const std::filesystem::pa
   spectrum_json["probes"] = probes_json;
   spectrum_json["steady_state"] = spectral::steady_state_json(state);
   spectrum_json["steady_state"]["window_periods"] = used;
-  io::write_json(directory / "spectrum.json", spectrum_json);
+  return spectrum_json;
 }
 
 /// The modal frequency a ring-down is compared with: bilinear for a breathing crack (the open body
@@ -966,7 +989,7 @@ double reduced_step(const ReducedModel& reduced, int steps_per_period, double fr
 /// energy.csv of the reduced model's energy balance, transient.json with the reduction's fields).
 transient::ProbeHistory run_reduced_stage(const scene::Scene& scene, const Model& model, TransientSetup& setup,
                                           const RunCommandOptions& options, std::optional<SpectrumMonitor>& spectrum,
-                                          double& dt, std::ostream& out) {
+                                          double& dt, RunOutcome& outcome, std::ostream& out) {
   const scene::TransientSection& section = *scene.transient;
   Stopwatch clock;
   const transient::InitialConditions& initial = setup.problem.initial;
@@ -977,6 +1000,10 @@ transient::ProbeHistory run_reduced_stage(const scene::Scene& scene, const Model
   reduced.system.rayleigh_beta = setup.settings.damping.beta;
   const int steps_per_period = section.reduced.steps_per_period;
   dt = reduced_step(reduced, steps_per_period, setup.frequency);
+  outcome.normal_penalty = reduced.system.normal_penalty;
+  outcome.max_frequency_hz = reduced.max_frequency_hz;
+  outcome.modes = reduced.modes;
+  outcome.pairs = static_cast<int>(reduced.pairs);
   const transient::Signal signal = setup.problem.loads.empty() ? transient::Signal{} : setup.problem.loads[0].signal;
   const bool loaded = !setup.problem.loads.empty();
   const reduced::ReducedIntegrator::LoadFunction load = [signal, loaded](double t) {
@@ -1040,19 +1067,6 @@ transient::ProbeHistory run_reduced_stage(const scene::Scene& scene, const Model
   return std::move(records.probes);
 }
 
-void write_run_json(const scene::Scene& scene, const fs::path& directory, const std::vector<Stage>& stages,
-                    double frequency, double wall_s) {
-  nlohmann::json run_json = {{"scene", scene.file}, {"output", directory.string()}};
-  nlohmann::json stage_list = nlohmann::json::array();
-  for (const Stage& stage : stages) {
-    stage_list.push_back({{"name", stage.name}, {"ran", stage.ran}, {"reason", stage.reason}, {"seconds", stage.seconds}});
-  }
-  run_json["stages"] = stage_list;
-  run_json["excitation_hz"] = frequency;
-  run_json["wall_s"] = wall_s;
-  io::write_json(directory / "run.json", run_json);
-}
-
 }  // namespace
 
 /// Frequency [Hz] of elastic mode `mode` (1-based) of the given kind from a modal result.
@@ -1108,17 +1122,37 @@ std::optional<modal::ModalResult> run_modal_stage(const scene::Scene& scene, con
   return modes;
 }
 
-namespace {
+/// The frequencies of the mode the excitation refers to, when it is paired.
+static std::optional<ModeSignature> excitation_mode(const scene::Scene& scene, const std::optional<modal::ModalResult>& modes) {
+  const std::optional<scene::ExcitationSection>& excitation = scene.transient->excitation;
+  if (!modes || !excitation || excitation->mode <= 0) return std::nullopt;
+  for (const modal::ModePair& pair : modes->pairs) {
+    if (!pair.paired || pair.uncracked_mode + 1 != excitation->mode) continue;
+    return ModeSignature{excitation->mode, pair.f_uncracked_hz, pair.f_open_hz, pair.f_bilinear_hz};
+  }
+  return std::nullopt;
+}
 
-void run_stages(const scene::Scene& scene, const RunCommandOptions& options, std::ostream& out) {
+RunOutcome run_scene(const scene::Scene& scene, const RunCommandOptions& options, std::ostream& out, RunReuse* reuse) {
   Stopwatch total;
+  RunOutcome outcome;
   const fs::path& directory = options.output_directory;
-  const Model model = build_model(scene, MeshUse::transient);
-  std::vector<Stage> stages;
+  std::unique_ptr<Model> own_model;
+  const bool shared = reuse && reuse->models.count(reuse->key);
+  if (!shared) own_model = std::make_unique<Model>(build_model(scene, MeshUse::transient));
+  const Model& model = shared ? *reuse->models.at(reuse->key) : *own_model;
+  std::vector<Stage>& stages = outcome.stages;
 
   Stage modal_stage{"modal", false, "", 0.0};
-  const std::optional<modal::ModalResult> modes = run_modal_stage(scene, model, directory, options.modal_cache, modal_stage, out);
+  std::optional<modal::ModalResult> modes;
+  if (shared && reuse->modes.count(reuse->key)) {
+    modes = reuse->modes.at(reuse->key);
+    modal_stage = {"modal", modes.has_value(), "shared with the run of the same mesh in this process", 0.0};
+  } else {
+    modes = run_modal_stage(scene, model, directory, options.modal_cache, modal_stage, out);
+  }
   stages.push_back(modal_stage);
+  outcome.mode = excitation_mode(scene, modes);
 
   Stage transient_stage{"transient", true, "the scene has a transient: section (model: " + scene.transient->model + ")"};
   Stopwatch transient_clock;
@@ -1128,7 +1162,7 @@ void run_stages(const scene::Scene& scene, const RunCommandOptions& options, std
   transient::ProbeHistory reduced_probes;
   double dt = 0.0;
   if (scene.transient->model == "reduced") {
-    reduced_probes = run_reduced_stage(scene, model, setup, options, spectrum, dt, out);
+    reduced_probes = run_reduced_stage(scene, model, setup, options, spectrum, dt, outcome, out);
   } else {
     solver = run_transient_stage(scene, model, setup, directory, spectrum);
     dt = solver->dt();
@@ -1156,7 +1190,7 @@ void run_stages(const scene::Scene& scene, const RunCommandOptions& options, std
     Stopwatch clock;
     spectrum_stage.ran = true;
     spectrum_stage.reason = "the scene has a spectrum: section";
-    on_writer_rank([&] { spectrum->write(scene, directory, dt, out); });
+    on_writer_rank([&] { outcome.spectrum = spectrum->write(scene, directory, dt, outcome.probes, out); });
     spectrum_stage.seconds = clock.seconds();
   } else if (scene.spectrum) {
     Stopwatch clock;
@@ -1168,19 +1202,44 @@ void run_stages(const scene::Scene& scene, const RunCommandOptions& options, std
     spectrum_stage.seconds = clock.seconds();
   }
   stages.push_back(spectrum_stage);
-  on_writer_rank([&] { write_run_json(scene, directory, stages, setup.frequency, total.seconds()); });
-  out << "wrote " << (directory / "run.json").string() << "\n";
+  if (reuse && !shared) {
+    reuse->modes[reuse->key] = modes;
+    reuse->models[reuse->key] = std::move(own_model);
+  }
+  outcome.frequency = setup.frequency;
+  outcome.wall_s = total.seconds();
+  return outcome;
 }
 
-}  // namespace
+void write_run_json(const scene::Scene& scene, const fs::path& directory, const RunOutcome& outcome,
+                    const nlohmann::json& route, const nlohmann::json& accuracy, double wall_s) {
+  nlohmann::json run_json = {{"scene", scene.file}, {"output", directory.string()}};
+  nlohmann::json stage_list = nlohmann::json::array();
+  for (const Stage& stage : outcome.stages) {
+    stage_list.push_back({{"name", stage.name}, {"ran", stage.ran}, {"reason", stage.reason}, {"seconds", stage.seconds}});
+  }
+  run_json["stages"] = stage_list;
+  run_json["excitation_hz"] = outcome.frequency;
+  if (!route.is_null()) run_json["route"] = route;
+  if (!accuracy.is_null()) run_json["accuracy"] = accuracy;
+  run_json["wall_s"] = wall_s;
+  io::write_json(directory / "run.json", run_json);
+}
+
 
 void run_run_command(const RunCommandOptions& options, std::ostream& out) {
-  const scene::Scene scene = scene::load_scene(options.scene_path, parse_overrides(options.overrides));
-  if (!scene.transient) {
-    throw InputError(scene.file + ": transient: expected a transient section for crackle run (crackle modal "
+  std::vector<scene::Override> overrides = parse_overrides(options.overrides);
+  const scene::Scene written = scene::load_scene(options.scene_path, overrides);
+  if (!written.transient) {
+    throw InputError(written.file + ": transient: expected a transient section for crackle run (crackle modal "
                      "computes modes alone), got none");
   }
   const int ranks = run_ranks();
+  // transient.model: auto becomes full or reduced (and the reduced route's own mesh) by overrides
+  // after the user's, so every later check and message sees the scene that runs.
+  const RunRoute route = choose_route(written, ranks);
+  overrides.insert(overrides.end(), route.overrides.begin(), route.overrides.end());
+  const scene::Scene scene = route.overrides.empty() ? written : scene::load_scene(options.scene_path, overrides);
   if (ranks > 1 && scene.transient->model == "reduced") {
     throw InputError(scene.where("transient.model") + ": expected full under mpirun -np " + std::to_string(ranks) +
                      " (one transient over several processes is the full explicit model), got reduced; run the "
@@ -1201,7 +1260,7 @@ void run_run_command(const RunCommandOptions& options, std::ostream& out) {
   NullStream silent;
   std::exception_ptr error;
   try {
-    run_stages(scene, options, is_writer_rank() ? out : silent);
+    run_with_accuracy(scene, route, overrides, options, is_writer_rank() ? out : silent);
   } catch (...) {
     error = std::current_exception();
   }

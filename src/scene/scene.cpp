@@ -234,8 +234,12 @@ Param build_parameters() {
              {"open", "uncracked"}).defaults_to("open"),
       choice("model", "full: the explicit finite-element model (MODEL.md eqs. 24-28); reduced: modes of the "
                       "variant + residual flexibility at the crack pairs (HYBRID.md sec. 2-3), implicit steps set "
-                      "by accuracy (rigid-body modes of a free body or piece are kept as modes of frequency 0).", {"full", "reduced"})
-          .defaults_to("full"),
+                      "by accuracy (rigid-body modes of a free body or piece are kept as modes of frequency 0); "
+                      "auto: the reduced model on its own graded mesh of a box for a harmonic-drive signature run "
+                      "(a crack, a spectrum: section, one process, no transient.time_step, no initial fields or "
+                      "release), raising the element order until accuracy.tolerance is met, else the full model; "
+                      "run.json route says which and why.", {"full", "reduced", "auto"})
+          .defaults_to("auto"),
       map_of("reduced", "The reduced model (transient.model: reduced).", {
         integer("modes", "Modes kept; auto: every mode of the variant up to max_frequency.").at_least(1)
             .or_word("auto").defaults_to("auto"),
@@ -331,6 +335,23 @@ Param build_parameters() {
                        "Hann.", {"auto", "rectangular", "hann", "flattop"}).defaults_to("auto"),
       boolean("plots", "PNG plots of each probe's history and spectrum (gnuplot; skipped with a note when "
                        "absent).").defaults_to("true"),
+    }).optional_section(),
+    map_of("accuracy", "Error estimates of the signatures (DETECTION.md sec. 1) and a tolerance to reach: each "
+                       "numerical error estimated by one refinement at a time from the setting that was run (mesh: "
+                       "three element orders on the same graded grid, Richardson with the observed rate; modes: "
+                       "twice the retained band; time step: twice the steps; penalty: four times it; the "
+                       "steady-state window change), reported in spectrum.json accuracy and on the terminal.", {
+      choice("estimate", "auto: on for the reduced model (its refinements cost a fraction of the run), off for "
+                         "the full model (they would cost more than the run); on; off.", {"auto", "on", "off"})
+          .defaults_to("auto"),
+      number("tolerance", "Relative error to reach on accuracy.quantities at every probe: the run refines the "
+                          "component with the largest error per unit cost until the estimate (sum of the "
+                          "components) is below it or accuracy.budget is spent; auto: 0.01 with transient.model: "
+                          "auto, else none (the estimate only).").above(0).below(1).or_word("auto").defaults_to("auto"),
+      number("budget", "Wall time the tolerance may spend, all runs together.").with_unit("s").above(0)
+          .defaults_to("600"),
+      choice("quantities", "Signatures the tolerance applies to (every signature gets its estimate).",
+             {"A1", "A2/A1", "A3/A1", "A1/2/A1", "f_b"}).list(1, 5).distinct().defaults_to("[A1, A2/A1]"),
     }).optional_section(),
     map_of("sweep", "Frequency sweep run by `crackle sweep` (HYBRID.md sections 4-5): the periodic response of the "
                     "reduced model to transient.excitation (its load shape and amplitude; its frequency is swept) "
@@ -867,8 +888,16 @@ Scene scene_from(const Values& values) {
   if (values.has("transient")) scene.transient = transient_from(values, scene);
   if (values.has("spectrum")) scene.spectrum = spectrum_from(values, scene);
   if (values.has("sweep")) scene.sweep = sweep_from(values, scene);
+  if (values.has("accuracy")) {
+    if (!scene.spectrum) values.fail("accuracy", "a spectrum: section (the accuracy estimates are of its signatures)", "none");
+    scene.accuracy.estimate = values.word("accuracy.estimate");
+    scene.accuracy.tolerance = optional_number(values, "accuracy.tolerance");
+    scene.accuracy.budget_s = values.number("accuracy.budget");
+    scene.accuracy.quantities = values.words("accuracy.quantities");
+    scene.has_accuracy_section = true;
+  }
   std::vector<std::string> named = {"mesh.box.cells", "mesh.box.order", "mesh.gmsh", "transient.periods",
-                                    "transient.duration", "transient.time_step", "transient.snapshots.count",
+                                    "transient.duration", "transient.time_step", "transient.snapshots.count", "transient.model",
                                     "transient.history.samples_per_period", "transient.excitation.point",
                                     "transient.excitation.frequency", "transient.excitation.frequency.hz",
                                     "spectrum.harmonics"};

@@ -149,7 +149,7 @@ struct TransientSection {
   double safety_factor = defaults::kSafetyFactor;
   bool force_time_step = false;
   std::string variant = "open";
-  std::string model = "full";  ///< "full" or "reduced"
+  std::string model = "auto";  ///< "full", "reduced" or "auto" (pipeline/route.hpp chooses)
   ReducedSection reduced;
   std::vector<ProbeSection> probes;
   std::vector<InitialSection> initial;
@@ -202,6 +202,14 @@ struct GradingSection {
   mesh::Grading grading;
 };
 
+/// `accuracy:`: error estimates of the signatures and a tolerance to reach (DETECTION.md sec. 1).
+struct AccuracySection {
+  std::string estimate = "auto";        ///< auto | on | off
+  std::optional<double> tolerance;      ///< relative; empty: auto (0.01 with transient.model: auto)
+  double budget_s = 600.0;              ///< wall time of all runs together [s]
+  std::vector<std::string> quantities = {"A1", "A2/A1"};  ///< what the tolerance applies to
+};
+
 struct Scene {
   std::string file;  ///< path the scene was read from (or a name for in-memory scenes)
   mesh::BoxSpec box;  ///< box.grading stays none: build_model sets it per command from `grading`
@@ -221,6 +229,8 @@ struct Scene {
   std::optional<TransientSection> transient;
   std::optional<SpectrumSection> spectrum;
   std::optional<SweepSection> sweep;
+  AccuracySection accuracy;
+  bool has_accuracy_section = false;
   /// 1-based line of some keys (those the pipeline may have to name after loading: mesh size,
   /// run length, snapshots, probe and load points); absent or <= 0 when not from the file.
   std::map<std::string, int> key_lines;

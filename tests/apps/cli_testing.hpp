@@ -43,6 +43,7 @@ inline std::string cantilever(const std::string& cells, bool with_crack = true) 
 /// steady-state stop) over the last 10; `probes` the entries of transient.probes.
 inline std::string forced_tip(const std::string& probes) {
   return R"(transient:
+  model: full
   excitation: {point: [0.2, 0.01, 0.01], direction: z, amplitude: 20.0, frequency: 150}
   damping: {ratio: 0.05, at: 150}
   periods: 40
@@ -62,6 +63,7 @@ inline std::string forced_tip(const std::string& probes) {
 inline std::string cracked_release(const std::string& contact) {
   return cantilever("[10, 1, 2]") + "  contact: {model: " + contact + "}\n" + R"(modal: {modes: 2, mass: lumped}
 transient:
+  model: full
   release:
     static: {face: x+, direction: z, amplitude: 50.0}
   duration: 0.15

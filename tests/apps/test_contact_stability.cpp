@@ -24,6 +24,7 @@ namespace {
 std::string scene_text(const std::string& integration, const std::string& penalty) {
   return cli_testing::deep_cracked_cantilever() + "  contact: {integration: " + integration + ", penalty: " + penalty +
          "}\n" + R"(transient:
+  model: full
   release:
     static: {point: [0.2, 0.01, 0.04], direction: z, amplitude: 2000}
   duration: 0.032

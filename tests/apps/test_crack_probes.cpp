@@ -23,6 +23,7 @@ namespace {
 /// plucked by a static tip load.
 std::string scene_text(const std::string& probes, const std::string& extra = "") {
   return cli_testing::deep_cracked_cantilever() + "  gap: 2.0e-7\n  contact: {friction: 0.3}\n" + R"(transient:
+  model: full
   release:
     static: {point: [0.2, 0.01, 0.04], direction: z, amplitude: 2000}
   duration: 0.02
@@ -144,6 +145,7 @@ material: {E: 210.0e9, nu: 0.3, rho: 7850.0}
 boundary:
   - {face: x-, fix: [x, y, z]}
 transient:
+  model: full
   duration: 0.001
   progress: false
   probes:

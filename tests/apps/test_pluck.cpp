@@ -87,6 +87,7 @@ const nlohmann::json& ringdown_of(const nlohmann::json& spectrum) { return spect
 TEST(Pluck, LinearSingleModeRingsAtItsFrequencyWithTheSetDampingRatio) {
   const std::string scene = std::string(kBeam) + R"(modal: {modes: 2, mass: lumped}
 transient:
+  model: full
   release:
     mode: {number: 1, amplitude: 1.0e-4}
   damping: {ratio: 0.02, at: {mode: 1}}
@@ -121,6 +122,7 @@ material: {E: 210.0e9, nu: 0.3, rho: 7850.0}
 boundary:
   - {face: x-, fix: [x, y, z]}
 transient:
+  model: full
   release:
     static: {face: x+, direction: z, amplitude: 50.0}
   duration: 1.0e-5
@@ -186,6 +188,7 @@ TEST(Pluck, OpenCantileverWithoutContactRingsAtTheOpenFrequency) {
 TEST(Tap, ImpactFrfPeaksAtTheModalFrequencies) {
   const std::string scene = std::string(kBeam) + R"(modal: {modes: 6, mass: lumped}
 transient:
+  model: full
   excitation: {point: [0.2, 0.01, 0.01], direction: z, amplitude: 100.0, kind: pulse, duration: 1.0e-4}
   damping: {ratio: 0.05, at: {mode: 1}}
   duration: 0.1
@@ -218,6 +221,7 @@ spectrum: {harmonics: 2, subharmonics: false}
 TEST(Pluck, StaticReleaseSolvesTheContactProblem) {
   using namespace crackle;
   const std::string text = std::string(kBeam) + kCrack + R"(transient:
+  model: full
   release:
     static: {face: x+, direction: z, amplitude: 50.0}
   duration: 1.0e-5

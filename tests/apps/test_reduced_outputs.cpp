@@ -37,6 +37,7 @@ const std::string kBreathing = cli_testing::forced_tip(R"(    - {name: mouth, cr
 /// A slow tip load (20 Hz, a tenth of f1) for one period from t = 0, snapshots at each quarter: the
 /// first (load up: the top crack pressed shut) and the third (load down: open) are at the load's peaks.
 const char* kSlow = R"(transient:
+  model: full
   excitation: {point: [0.2, 0.01, 0.01], direction: z, amplitude: 20.0, frequency: 20, ramp_periods: 0}
   damping: {ratio: 0.05, at: 200}
   periods: 1

@@ -123,6 +123,7 @@ TEST(ReducedRelease, WithoutContactTheReducedModelRingsAtTheOpenFrequency) {
 TEST(ReducedRelease, ModeReleaseStartsOnTheModeAndRingsAtItsFrequency) {
   const std::string scene = cli_testing::cantilever("[10, 1, 2]", false) + R"(modal: {modes: 2, mass: lumped}
 transient:
+  model: full
   release:
     mode: {number: 1, amplitude: 1.0e-4}
   duration: 0.1
@@ -146,6 +147,7 @@ spectrum: {harmonics: 2, subharmonics: false}
 // kinetic energy above max_frequency (transient.json initial_state.velocity_lost, in the mass norm).
 TEST(ReducedRelease, UniformInitialVelocityGivesTheFullModelsSwing) {
   const std::string scene = cli_testing::cantilever("[10, 1, 2]", false) + R"(transient:
+  model: full
   initial:
     - {velocity: [0, 0, 0.1], x: [0.15, 0.2]}
   duration: 0.01
@@ -177,6 +179,7 @@ TEST(ReducedRelease, FreeBodyStruckByAPulseDriftsAsTheFullModel) {
   box: {size: [0.2, 0.02, 0.01], cells: [10, 1, 2], order: 1}
 material: {E: 210.0e9, nu: 0.3, rho: 7850.0}
 transient:
+  model: full
   excitation: {point: [0.2, 0.01, 0.01], direction: z, amplitude: 20.0, kind: pulse, duration: 2.0e-4}
   duration: 0.02
   progress: false

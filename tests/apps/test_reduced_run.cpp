@@ -27,6 +27,7 @@ const std::string kForced = cli_testing::forced_tip("    - {name: tip, point: [0
 
 /// A short tip pulse, then free vibration without damping.
 const char* kPulse = R"(transient:
+  model: full
   excitation: {point: [0.2, 0.01, 0.01], direction: z, amplitude: 20.0, kind: pulse, duration: 2.0e-4}
   duration: 0.1
   progress: false

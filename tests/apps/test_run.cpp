@@ -19,6 +19,7 @@ namespace {
 /// bilinear frequency; mass-proportional damping of 5 % at mode 1.
 const std::string kScene = cli_testing::cantilever("[10, 1, 1]") + R"(modal: {modes: 2}
 transient:
+  model: full
   excitation: {face: x+, direction: z, amplitude: 20.0, frequency: {mode: 1, ratio: 0.5}}
   damping: {ratio: 0.05, at: {mode: 1}}
   periods: 60

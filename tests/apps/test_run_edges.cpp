@@ -20,6 +20,7 @@ namespace {
 
 /// A 10 x 1 x 1 cantilever of p = 1 with a half-depth edge crack, driven at 100 Hz for 4 periods.
 const std::string kScene = cli_testing::cantilever("[10, 1, 1]") + R"(transient:
+  model: full
   excitation: {face: x+, direction: z, amplitude: 20.0, frequency: 100}
   periods: 4
   progress: false
@@ -233,7 +234,7 @@ TEST(RunEdges, LateMessagesNameTheKeyAndTheLine) {
   text.replace(text.find("frequency: 100"), 14, "frequency: 1e12");
   const Result nyquist = run("nyquist", "", scene_file("fast.yaml", text));
   EXPECT_EQ(nyquist.exit_code, 2) << nyquist.output;
-  EXPECT_NE(nyquist.output.find("fast.yaml:10: transient.excitation.frequency: expected a frequency whose harmonic 3 "
+  EXPECT_NE(nyquist.output.find("fast.yaml:11: transient.excitation.frequency: expected a frequency whose harmonic 3 "
                                 "(spectrum.harmonics) lies below the Nyquist frequency"),
             std::string::npos)
       << nyquist.output;
@@ -248,7 +249,7 @@ TEST(RunEdges, LateMessagesNameTheKeyAndTheLine) {
   text = kScene;
   text.replace(text.find("periods: 4"), 10, "periods: 1e9");
   const Result from_file = run("steps", "", scene_file("long.yaml", text));
-  EXPECT_NE(from_file.output.find("long.yaml:11: transient.periods: expected a run of at most 2e9 steps"),
+  EXPECT_NE(from_file.output.find("long.yaml:12: transient.periods: expected a run of at most 2e9 steps"),
             std::string::npos)
       << from_file.output;
   EXPECT_FALSE(fs::exists(scratch() / "steps"));

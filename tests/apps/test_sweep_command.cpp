@@ -25,6 +25,7 @@ namespace {
 /// The 10 x 1 x 1 cantilever of test_run.cpp (p = 1, half-depth edge crack, 5 % damping at mode 1),
 /// swept through half its first bilinear frequency.
 const std::string kScene = cli_testing::cantilever("[10, 1, 1]") + R"(transient:
+  model: full
   excitation: {face: x+, direction: z, amplitude: 20.0, frequency: {mode: 1, ratio: 0.5}}
   damping: {ratio: 0.05, at: {mode: 1}}
   periods: 60

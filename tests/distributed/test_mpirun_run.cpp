@@ -190,6 +190,7 @@ crack:
 std::string chattering_cantilever(const std::string& extra) {
   return cracked_cantilever() + R"(  contact: {friction: 0.3}
 transient:
+  model: full
   excitation: {face: x+, direction: z, amplitude: 200.0, frequency: {hz: 700.0}}
   periods: 4
   progress: false
@@ -267,6 +268,7 @@ material: {E: 210.0e9, nu: 0.3, rho: 7850.0}
 boundary:
   - {group: clamp, fix: [x, y, z]}
 transient:
+  model: full
   excitation: {group: bottom, direction: z, amplitude: 1000.0, frequency: {hz: 900.0}}
   initial:
     - {velocity: [0.0, 0.1, 0.0], x: [0.1, 0.2]}
@@ -286,6 +288,7 @@ TEST(MpirunRun, StaticReleaseAndPointLoadSameAsOneProcess) {
   // The crack pressed shut by a static tip load (solved on the whole body by every rank), released
   // at t = 0, then driven by a point force on one node.
   const std::string scene = cracked_cantilever() + R"(transient:
+  model: full
   release:
     static: {face: x+, direction: z, amplitude: 500.0}
   excitation: {point: [0.2, 0.02, 0.04], direction: y, amplitude: 50.0, frequency: {hz: 800.0}}
@@ -360,6 +363,7 @@ material: {E: 210.0e9, nu: 0.3, rho: 7850.0}
 boundary:
   - {face: x-, fix: [x, y, z]}
 transient:
+  model: full
   initial:
     - {velocity: [0.0, 0.0, 1.0]}
   duration: 1.0e-4

@@ -92,7 +92,7 @@ TEST(Scene, LoadsAFile) {
   EXPECT_EQ(scene.file, path);
   EXPECT_EQ(scene.box.cells[0], 40);
   EXPECT_EQ(error_of(""),
-            "beam.yaml: expected a map with keys mesh, material, materials, boundary, crack, modal, transient, spectrum, sweep, "
+            "beam.yaml: expected a map with keys mesh, material, materials, boundary, crack, modal, transient, spectrum, accuracy, sweep, "
             "got an empty file");
 }
 
@@ -137,7 +137,7 @@ struct BadScene {
 };
 
 TEST(Scene, BadScenesGiveOneExactLine) {
-  const std::string sections = "mesh, material, materials, boundary, crack, modal, transient, spectrum, sweep";
+  const std::string sections = "mesh, material, materials, boundary, crack, modal, transient, spectrum, accuracy, sweep";
   const std::vector<BadScene> cases = {
       // the file as a whole
       {"# only a comment\n", "beam.yaml: expected a map with keys " + sections + ", got an empty file"},

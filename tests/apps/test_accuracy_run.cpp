@@ -1,0 +1,191 @@
+// `crackle run` with transient.model: auto and the accuracy estimate (DETECTION.md sec. 1): the default
+// route on data/beam.yaml as written, checked against a reference converged by hand (effectivity of
+// the estimate), the routes that fall back to the full model and say why, the tolerance loop, and
+// bad accuracy input.
+#include <gtest/gtest.h>
+
+#include "cli_testing.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// The converged signature of data/beam.yaml (docs/benchmarks.md section 11.1): the reduced model on
+// graded meshes finer than the default route's in every component: order 4 with 5 front layers
+// (the route has 3; the rest extrapolated from 3 -> 4 -> 5), [20, 2, 2] cells against [20, 2, 1],
+// the band doubled and the steady state to 1e-5 (the scene's 1e-3). The bilinear frequency's front
+// share converges slowly in the layers (ratio 1.2-2 per layer): its reference is good to about 3e-5,
+// which is of the order of the default route's own error.
+constexpr double kReferenceA2 = 0.15486;
+constexpr double kReferenceBilinearHz = 205.4561;
+
+fs::path scratch() {
+  static const fs::path dir = fs::temp_directory_path() / ("crackle-test-accuracy-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir;
+}
+
+nlohmann::json read_json(const fs::path& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+cli_testing::Result run_scene_text(const std::string& name, const std::string& text, const std::string& extra = "") {
+  const fs::path scene = scratch() / (name + ".yaml");
+  std::ofstream(scene) << text;
+  return cli_testing::crackle("run " + scene.string() + " -o " + (scratch() / name).string() + " -q " + extra);
+}
+
+/// The cracked p = 1 cantilever driven at its tip (cli_testing, written for the full model) with
+/// transient.model `model` and `transient` lines added.
+std::string forced(const std::string& model, const std::string& transient_lines) {
+  std::string text = cli_testing::cantilever("[10, 2, 1]") +
+                     cli_testing::forced_tip("    - {name: tip, point: [0.2, 0.01, 0.01]}\n");
+  const std::string marker = "  model: full\n";
+  text.replace(text.find(marker), marker.size(), "  model: " + model + "\n" + transient_lines);
+  return text;
+}
+
+// The README's main job: the beam as a user writes it (uniform cells [40, 4, 2], p = 2, no accuracy
+// keys). The route takes the reduced model on its own graded mesh, says so in run.json, lands within
+// 1 % of the converged A2/A1, and the estimate it reports holds the true error: effectivity in [1, 3]
+// for A2/A1, at least 1 for the bilinear frequency.
+TEST(DefaultRoute, TheBeamAsWrittenGivesItsConvergedSignatureWithAnEstimateThatHoldsIt) {
+  const fs::path out = scratch() / "beam";
+  const cli_testing::Result result =
+      cli_testing::crackle("run " + std::string(CRACKLE_SOURCE_DIR) + "/data/beam.yaml -o " + out.string() + " -q");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("accuracy tip: A2/A1 = "), std::string::npos) << result.output;
+
+  const nlohmann::json run = read_json(out / "run.json");
+  ASSERT_TRUE(run.contains("route")) << run.dump(2);
+  EXPECT_EQ(run["route"]["model"], "reduced");
+  EXPECT_TRUE(run["route"]["automatic"].get<bool>());
+  EXPECT_NE(run["route"]["reason"].get<std::string>().find("harmonic-drive signature run"), std::string::npos);
+  EXPECT_EQ(run["route"]["scene_mesh"]["cells"], nlohmann::json::parse("[40, 4, 2]"));
+  EXPECT_EQ(run["route"]["mesh"]["cells"], nlohmann::json::parse("[20, 2, 1]"));
+  EXPECT_EQ(run["route"]["mesh"]["order"], 4);
+  EXPECT_TRUE(run["accuracy"]["met"].get<bool>());
+
+  const nlohmann::json spectrum = read_json(out / "spectrum.json");
+  const nlohmann::json& accuracy = spectrum["accuracy"];
+  EXPECT_TRUE(accuracy["estimated"].get<bool>());
+  EXPECT_EQ(accuracy["tolerance"].get<double>(), 0.01);
+  EXPECT_TRUE(accuracy["met"].get<bool>());
+  EXPECT_TRUE(accuracy["verified"].get<bool>());
+
+  const double a2 = spectrum["probes"]["tip"]["indices"]["A2/A1"].get<double>();
+  const double a2_true_error = std::abs(a2 - kReferenceA2) / kReferenceA2;
+  EXPECT_LT(a2_true_error, 0.01) << "A2/A1 = " << a2;
+  const nlohmann::json& a2_estimate = accuracy["probes"]["tip"]["A2/A1"];
+  EXPECT_EQ(a2_estimate["value"].get<double>(), a2);
+  EXPECT_TRUE(a2_estimate["verified"].get<bool>());
+  for (const char* component : {"mesh", "modes", "steps", "penalty", "window"}) {
+    EXPECT_TRUE(a2_estimate["components"].contains(component)) << component;
+  }
+  const double a2_effectivity = a2_estimate["error"].get<double>() / a2_true_error;
+  EXPECT_GE(a2_effectivity, 1.0) << "estimate " << a2_estimate["error"] << ", true error " << a2_true_error;
+  EXPECT_LE(a2_effectivity, 3.0) << "estimate " << a2_estimate["error"] << ", true error " << a2_true_error;
+  // The estimate's sum is conservative against its root-sum-square.
+  EXPECT_LE(a2_estimate["rss"].get<double>(), a2_estimate["error"].get<double>());
+
+  const nlohmann::json& fb = accuracy["mode"]["f_bilinear"];
+  const double fb_true_error = std::abs(fb["value"].get<double>() - kReferenceBilinearHz) / kReferenceBilinearHz;
+  const double fb_effectivity = fb["error"].get<double>() / fb_true_error;
+  EXPECT_TRUE(fb["verified"].get<bool>());
+  // Never below 1. Its upper side is measured at 4-8 (the order levels overstate the error of a
+  // frequency that converges faster than geometrically in the order; docs/benchmarks.md 11.2), above
+  // the [1, 3] the estimate aims at: not asserted here, reported there as missed.
+  EXPECT_GE(fb_effectivity, 1.0) << "estimate " << fb["error"] << ", true error " << fb_true_error;
+}
+
+// Where the reduced model's validity conditions do not hold, auto takes the full model and says why;
+// the full model's signature is then not estimated, and spectrum.json says that too.
+TEST(DefaultRoute, TakesTheFullModelWithItsReasonWhereTheReducedOneDoesNotServe) {
+  const cli_testing::Result stepped = run_scene_text("time-step", forced("auto", "  time_step: 5.0e-7\n"));
+  ASSERT_EQ(stepped.exit_code, 0) << stepped.output;
+  const nlohmann::json run = read_json(scratch() / "time-step" / "run.json");
+  EXPECT_EQ(run["route"]["model"], "full");
+  EXPECT_NE(run["route"]["reason"].get<std::string>().find("transient.time_step"), std::string::npos);
+  EXPECT_FALSE(run["route"].contains("mesh"));
+  const nlohmann::json spectrum = read_json(scratch() / "time-step" / "spectrum.json");
+  EXPECT_FALSE(spectrum["accuracy"]["estimated"].get<bool>());
+  EXPECT_NE(spectrum["accuracy"]["reason"].get<std::string>().find("full model"), std::string::npos);
+  const nlohmann::json transient = read_json(scratch() / "time-step" / "transient.json");
+  EXPECT_FALSE(transient.contains("model") && transient["model"] == "reduced");
+
+  const cli_testing::Result initial = run_scene_text(
+      "initial", forced("auto", "  initial:\n    - {velocity: [0, 0, 0.01]}\n"));
+  ASSERT_EQ(initial.exit_code, 0) << initial.output;
+  EXPECT_NE(read_json(scratch() / "initial" / "run.json")["route"]["reason"].get<std::string>().find("transient.initial"),
+            std::string::npos);
+}
+
+// transient.model: reduced as written keeps the scene's mesh; its estimate runs, and at order 1 the
+// mesh part cannot be estimated: the estimate says `verified: false` with the reason instead of a
+// small number. No tolerance without transient.model: auto unless asked.
+TEST(Accuracy, AnExplicitReducedRunOnItsOwnMeshSaysWhenItsMeshErrorIsNotEstimated) {
+  const cli_testing::Result result = run_scene_text("reduced-p1", forced("reduced", ""));
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const nlohmann::json run = read_json(scratch() / "reduced-p1" / "run.json");
+  EXPECT_FALSE(run["route"]["automatic"].get<bool>());
+  EXPECT_FALSE(run["route"].contains("mesh"));
+  const nlohmann::json accuracy = read_json(scratch() / "reduced-p1" / "spectrum.json")["accuracy"];
+  EXPECT_TRUE(accuracy["estimated"].get<bool>());
+  EXPECT_TRUE(accuracy["tolerance"].is_null());
+  EXPECT_FALSE(accuracy.contains("met"));
+  const nlohmann::json& a2 = accuracy["probes"]["tip"]["A2/A1"];
+  EXPECT_FALSE(a2["verified"].get<bool>());
+  EXPECT_NE(a2["components"]["mesh"]["reason"].get<std::string>().find("order 3"), std::string::npos);
+  EXPECT_NE(result.output.find("not verified"), std::string::npos) << result.output;
+  // The other components ran and are numbers.
+  for (const char* component : {"modes", "steps", "penalty"}) {
+    EXPECT_TRUE(a2["components"][component]["delta"].is_number()) << component;
+  }
+}
+
+// A tolerance the setting cannot reach: the run ends with met: false and names what blocks, and the
+// output folder holds the files of the setting it reports (no temporary folder left behind).
+TEST(Accuracy, AToleranceThatCannotBeMetEndsWithMetFalseAndTheBlockingComponent) {
+  const cli_testing::Result result = run_scene_text(
+      "unmet", forced("reduced", "") + "accuracy: {tolerance: 1.0e-9, budget: 60}\n");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const nlohmann::json accuracy = read_json(scratch() / "unmet" / "spectrum.json")["accuracy"];
+  EXPECT_FALSE(accuracy["met"].get<bool>());
+  ASSERT_TRUE(accuracy.contains("blocking"));
+  EXPECT_FALSE(accuracy["blocking"].get<std::string>().empty());
+  EXPECT_GT(accuracy["error"].get<double>(), 1.0e-9);
+  EXPECT_NE(result.output.find("not met"), std::string::npos) << result.output;
+  for (const fs::directory_entry& entry : fs::directory_iterator(scratch() / "unmet")) {
+    EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << entry.path();
+  }
+}
+
+TEST(Accuracy, BadAccuracyInputIsAClearError) {
+  const cli_testing::Result full_on =
+      run_scene_text("full-on", forced("full", "") + "accuracy: {estimate: on}\n");
+  EXPECT_EQ(full_on.exit_code, 2) << full_on.output;
+  EXPECT_NE(full_on.output.find("accuracy.estimate: expected auto or off with transient.model: full"),
+            std::string::npos)
+      << full_on.output;
+
+  std::string no_spectrum = forced("auto", "");
+  no_spectrum = no_spectrum.substr(0, no_spectrum.find("spectrum:")) + "accuracy: {tolerance: 0.01}\n";
+  const cli_testing::Result missing = run_scene_text("no-spectrum", no_spectrum);
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;
+  EXPECT_NE(missing.output.find("accuracy: expected a spectrum: section"), std::string::npos) << missing.output;
+
+  const cli_testing::Result bad_tolerance =
+      run_scene_text("bad-tolerance", forced("auto", "") + "accuracy: {tolerance: 2}\n");
+  EXPECT_EQ(bad_tolerance.exit_code, 2) << bad_tolerance.output;
+  EXPECT_NE(bad_tolerance.output.find("accuracy.tolerance"), std::string::npos) << bad_tolerance.output;
+}
+
+}  // namespace
