@@ -181,6 +181,15 @@ json summarize_spectrum(const json& spectrum) {
           indices[index] = value.is_number() ? value : json(nullptr);
       }
       kept["indices"] = indices;
+      // The run's error estimate of each signature (spectrum.json accuracy, issue 23): its relative sum.
+      json errors = json::object();
+      const json accuracy = spectrum.value("accuracy", json::object());
+      if (accuracy.is_object() && accuracy.contains("probes") && accuracy["probes"].is_object() &&
+          accuracy["probes"].contains(name) && accuracy["probes"][name].is_object()) {
+        for (const auto& [quantity, estimate] : accuracy["probes"][name].items())
+          errors[quantity] = number_field(estimate, {"error"});
+      }
+      kept["errors"] = errors;
       probes[name] = kept;
     }
   }
@@ -296,6 +305,7 @@ StudyTable build_table(const StudyPlan& plan, const std::vector<json>& cases) {
   struct ProbeColumns {
     std::set<double> orders;
     std::set<std::string> indices;
+    std::set<std::string> errors;  ///< signatures with an error estimate in some case
     std::string unit;
   };
   std::map<std::string, ProbeColumns> probes;
@@ -316,6 +326,8 @@ StudyTable build_table(const StudyPlan& plan, const std::vector<json>& cases) {
           columns.orders.insert(a["order"].get<double>());
         const json indices = probe.value("indices", json::object());
         for (const auto& [index, value] : indices.items()) columns.indices.insert(index);
+        const json errors = probe.value("errors", json::object());
+        for (const auto& [quantity, value] : errors.items()) columns.errors.insert(quantity);
         if (probe.contains("unit") && columns.unit.empty()) columns.unit = probe["unit"].get<std::string>();
       }
     }
@@ -403,6 +415,19 @@ StudyTable build_table(const StudyPlan& plan, const std::vector<json>& cases) {
         const json probe = probe_of(c);
         if (probe.is_null() || !probe.contains("indices")) return Cell{};
         return number_cell(probe["indices"].value(index, json()));
+      });
+    }
+    // The estimated relative error of A1 and of each index (the sum of its components), where the
+    // runs estimated it.
+    kind = "error";
+    std::vector<std::string> estimated = {"A1"};
+    estimated.insert(estimated.end(), indices.begin(), indices.end());
+    for (const std::string& quantity : estimated) {
+      if (!columns.errors.count(quantity)) continue;
+      add(name + "." + quantity + " error [-]", [=](const json& c) {
+        const json probe = probe_of(c);
+        if (probe.is_null() || !probe.contains("errors")) return Cell{};
+        return number_cell(probe["errors"].value(quantity, json()));
       });
     }
   }

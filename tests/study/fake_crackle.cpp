@@ -132,10 +132,14 @@ int main(int argc, char** argv) {
                              {"phase_rad", 0.0}});
       json indices = {
           {"A2/A1", a2 / a1}, {"A3/A1", a3 / a1}, {"A1/2/A1", a_half / a1}, {"beta", a2 / (a1 * a1)}};
+      // The accuracy block of crackle run (issue 23): a relative error per signature.
+      const json accuracy = {{"estimated", true},
+                             {"probes", {{"tip", {{"A1", {{"error", 1e-4}}}, {"A2/A1", {{"error", 0.002 * fraction}}}}}}}};
       crackle::io::write_json(
           out / "spectrum.json",
           {{"excitation_hz", excitation},
-           {"probes", {{"tip", {{"component", "z"}, {"harmonics", harmonics}, {"indices", indices}}}}}});
+           {"probes", {{"tip", {{"component", "z"}, {"harmonics", harmonics}, {"indices", indices}}}}},
+           {"accuracy", accuracy}});
       crackle::io::write_json(out / "run.json", {{"steps", 100}});
     } else if (command != "modal") {
       throw crackle::InputError("unknown command '" + command + "'");

@@ -181,8 +181,11 @@ TEST(StudyRun, SixCasesOneFailingAreAllTabulated) {
   for (const char* name :
        {"case", "crack.region.z [m]", "material.nu [-]", "status", "error", "f_uncracked_1 [Hz]", "f_open_1 [Hz]",
         "f_bilinear_1 [Hz]", "mac_1 [-]", "f_uncracked_3 [Hz]", "excitation [Hz]", "tip.A1/2 [m]", "tip.A1 [m]",
-        "tip.A2 [m]", "tip.A3 [m]", "tip.A2/A1 [-]", "tip.A3/A1 [-]", "tip.A1/2/A1 [-]", "tip.beta [1/m]"})
+        "tip.A2 [m]", "tip.A3 [m]", "tip.A2/A1 [-]", "tip.A3/A1 [-]", "tip.A1/2/A1 [-]", "tip.beta [1/m]",
+        "tip.A1 error [-]", "tip.A2/A1 error [-]"})
     column(name);
+  // Only the signatures the runs estimated get an error column.
+  EXPECT_EQ(std::find(header.begin(), header.end(), "tip.A3/A1 error [-]"), header.end());
   for (std::size_t i = 1; i < rows.size(); ++i) {
     const auto row = csv_fields(rows[i]);
     ASSERT_EQ(row.size(), header.size()) << rows[i];
@@ -196,6 +199,9 @@ TEST(StudyRun, SixCasesOneFailingAreAllTabulated) {
       EXPECT_EQ(row[column("error")], "");
       EXPECT_GT(std::stod(row[column("f_uncracked_1 [Hz]")]), std::stod(row[column("f_open_1 [Hz]")]));
       EXPECT_GT(std::stod(row[column("tip.A2/A1 [-]")]), 0.0);
+      // The fake's A2/A1 is 0.2 * fraction and its error 0.002 * fraction: one hundredth of it.
+      EXPECT_NEAR(std::stod(row[column("tip.A2/A1 error [-]")]), 0.01 * std::stod(row[column("tip.A2/A1 [-]")]), 1e-12);
+      EXPECT_DOUBLE_EQ(std::stod(row[column("tip.A1 error [-]")]), 1e-4);
     }
   }
   EXPECT_EQ(csv_fields(rows[6])[column("crack.region.z [m]")], "[0.004, 0.01]");
