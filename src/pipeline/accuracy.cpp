@@ -411,6 +411,8 @@ void run_with_accuracy(const scene::Scene& scene, const RunRoute& route, const s
       }
       write_run_json(scene, directory, outcome, route_json, accuracy, total.seconds());
     });
+    // An accuracy: section that this run cannot honour is said, not ignored.
+    if (scene.has_accuracy_section) std::cerr << "crackle: note: accuracy: not estimated: " << plan.reason << "\n";
     out << "wrote " << (directory / "run.json").string() << "\n";
     return;
   }

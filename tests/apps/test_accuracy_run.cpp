@@ -176,6 +176,13 @@ TEST(Accuracy, BadAccuracyInputIsAClearError) {
             std::string::npos)
       << full_on.output;
 
+  // A tolerance the full model cannot honour is said, not ignored.
+  const cli_testing::Result full_tolerance =
+      run_scene_text("full-tolerance", forced("full", "") + "accuracy: {tolerance: 0.01}\n");
+  EXPECT_EQ(full_tolerance.exit_code, 0) << full_tolerance.output;
+  EXPECT_NE(full_tolerance.output.find("note: accuracy: not estimated: the full model"), std::string::npos)
+      << full_tolerance.output;
+
   std::string no_spectrum = forced("auto", "");
   no_spectrum = no_spectrum.substr(0, no_spectrum.find("spectrum:")) + "accuracy: {tolerance: 0.01}\n";
   const cli_testing::Result missing = run_scene_text("no-spectrum", no_spectrum);

@@ -209,7 +209,8 @@ TEST(ReducedRun, ADelaminationWithUnresolvedClosuresStaysStableAndConvergesInThe
 TEST(ReducedRun, StudyOverExcitationFrequencyComputesTheReductionOnce) {
   const fs::path scene = scratch() / "study.yaml";
   std::string forced = kForced;
-  forced.replace(forced.find("periods: 40"), 11, "periods: 20\n  model: reduced");
+  forced.replace(forced.find("periods: 40"), 11, "periods: 20");
+  forced.replace(forced.find("model: full"), 11, "model: reduced");
   std::ofstream(scene) << kBody << forced << R"(study:
   vary:
     transient.excitation.frequency: [140, 150, 160]

@@ -222,7 +222,7 @@ TEST(SweepCommand, BadSweepKeysGiveFileAndLine) {
   text.replace(text.find("harmonics: 15"), 13, "harmonics: -2");
   EXPECT_EQ(crackle_sweep("bad", text, "", &output), 2);
   const std::string file = (scratch() / "bad.yaml").string();
-  EXPECT_NE(output.find(file + ":17: sweep.harmonics: expected an integer in 1..200, got -2"), std::string::npos)
+  EXPECT_NE(output.find(file + ":18: sweep.harmonics: expected an integer in 1..200, got -2"), std::string::npos)
       << output;
   EXPECT_FALSE(fs::exists(scratch() / "bad" / "sweep.json"));
   EXPECT_EQ(crackle_sweep("none", std::string(kScene).substr(0, std::string(kScene).find("sweep:")), "", &output), 2);
