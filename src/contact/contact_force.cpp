@@ -1,5 +1,7 @@
 #include "contact/contact_force.hpp"
 
+#include <nlohmann/json.hpp>
+
 namespace crackle::contact {
 
 nlohmann::json contact_json(const PenaltyContact& contact) {

@@ -1,7 +1,7 @@
 #pragma once
 /// \file The crack-face contact as a force term of the semi-discrete system (fem::ForceTerm): the
 /// time integrator plugs it in from outside and never names contact (STYLE.md).
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 #include "contact/contact.hpp"
 #include "fem/force_term.hpp"

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include <unistd.h>
+#include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
 

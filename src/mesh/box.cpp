@@ -21,12 +21,26 @@ std::array<int, 2> in_plane_axes(int normal) {
   return {normal == kX ? kY : kX, normal == kZ ? kY : kZ};
 }
 
+/// Line k of the uniform grid along `axis`.
+double uniform_line(const BoxSpec& box, int axis, int k) { return box.origin[axis] + box.size[axis] * k / box.cells[axis]; }
+
 std::vector<double> uniform_lines(const BoxSpec& box, int axis) {
   std::vector<double> lines(box.cells[axis] + 1);
-  for (int k = 0; k <= box.cells[axis]; ++k) {
-    lines[k] = box.origin[axis] + box.size[axis] * k / box.cells[axis];
-  }
+  for (int k = 0; k <= box.cells[axis]; ++k) lines[k] = uniform_line(box, axis, k);
   return lines;
+}
+
+/// find_line(uniform_lines(box, axis), position, tol) for a position inside the box, without building
+/// the cells + 1 lines: only the few lines within tol of the position are tried, so that checking
+/// a crack on a box of 1e9 cells (refused later as too large) takes no memory and no time.
+int find_uniform_line(const BoxSpec& box, int axis, double position, double tol) {
+  const double cells = box.cells[axis];
+  const double first = std::floor((position - tol - box.origin[axis]) / box.size[axis] * cells) - 1.0;
+  const double last = std::ceil((position + tol - box.origin[axis]) / box.size[axis] * cells) + 1.0;
+  for (int k = static_cast<int>(std::max(0.0, first)); k <= static_cast<int>(std::min(cells, last)); ++k) {
+    if (std::abs(uniform_line(box, axis, k) - position) <= tol) return k;
+  }
+  return -1;
 }
 
 /// Index of the line at `position`, or -1.
@@ -125,13 +139,12 @@ std::string check_crack(const BoxSpec& box, const CrackSpec& crack) {
     return "plane.at: expected a position strictly inside the body, " + axis + " in (" +
            format_number(low) + ", " + format_number(high) + "), got " + format_number(crack.at);
   }
-  const std::vector<double> lines = uniform_lines(box, normal);
-  if (find_line(lines, crack.at, tolerance(box, normal)) < 0) {
+  if (find_uniform_line(box, normal, crack.at, tolerance(box, normal)) < 0) {
     const double spacing = box.size[normal] / box.cells[normal];
     const int below = static_cast<int>(std::floor((crack.at - low) / spacing));
     return "plane.at: expected a grid plane of the mesh, " + axis + " = " + format_number(low) +
-           " + k*" + format_number(spacing) + " (nearest " + format_number(lines[below]) + " or " +
-           format_number(lines[std::min<int>(below + 1, box.cells[normal])]) + "), got " +
+           " + k*" + format_number(spacing) + " (nearest " + format_number(uniform_line(box, normal, below)) + " or " +
+           format_number(uniform_line(box, normal, std::min<int>(below + 1, box.cells[normal]))) + "), got " +
            format_number(crack.at);
   }
   for (int t : in_plane_axes(normal)) {

@@ -3,6 +3,7 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <nlohmann/json.hpp>
 
 #include "io/files.hpp"
 

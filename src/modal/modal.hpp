@@ -12,7 +12,7 @@
 #include <functional>
 #include <vector>
 
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 #include "core/defaults.hpp"
 #include "core/types.hpp"

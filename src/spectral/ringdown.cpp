@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
 #include "spectral/spectrum.hpp"

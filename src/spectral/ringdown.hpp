@@ -9,7 +9,7 @@
 /// k = 1/2, 3/2, ..., H - 1/2 of the ring-down frequency f.
 #include <complex>
 #include <limits>
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 #include <vector>
 
 #include "spectral/harmonics.hpp"

@@ -1,7 +1,7 @@
 #pragma once
 /// \file Damage indices and the JSON of harmonic signatures (a public contract: the key names
 /// below are read by scripts and reports; change them only with a format version bump).
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 
 #include "spectral/harmonics.hpp"

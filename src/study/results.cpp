@@ -9,6 +9,7 @@
 #include <functional>
 #include <map>
 #include <set>
+#include <nlohmann/json.hpp>
 
 #include "io/csv.hpp"
 #include "io/files.hpp"

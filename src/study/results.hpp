@@ -10,7 +10,7 @@
 ///   `harmonics[].order` and `.amplitude`, `indices{}` (every index given, e.g. "A2/A1", "beta").
 #include <filesystem>
 #include <limits>
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
 

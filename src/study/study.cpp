@@ -17,6 +17,7 @@
 #include <map>
 #include <ostream>
 #include <thread>
+#include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
 #include "io/files.hpp"

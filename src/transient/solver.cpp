@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
 #include "core/resources.hpp"
@@ -836,6 +837,10 @@ void write_transient_outputs(const std::filesystem::path& directory, const Trans
   nlohmann::json json = transient_json(solver.summary());
   json.update(extra);
   io::write_json(directory / "transient.json", json);
+}
+
+void write_transient_outputs(const std::filesystem::path& directory, const TransientSolver& solver) {
+  write_transient_outputs(directory, solver, nlohmann::json::object());
 }
 
 }  // namespace crackle::transient

@@ -24,7 +24,7 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 #include "fem/force_term.hpp"
 #include "fem/system.hpp"
@@ -230,6 +230,8 @@ nlohmann::json transient_json(const TransientSummary& summary);
 /// probes.csv, energy.csv and transient.json (the summary merged with `extra`) into a directory
 /// (created if needed).
 void write_transient_outputs(const std::filesystem::path& directory, const TransientSolver& solver,
-                             const nlohmann::json& extra = nlohmann::json::object());
+                             const nlohmann::json& extra);
+/// The same without extra fields.
+void write_transient_outputs(const std::filesystem::path& directory, const TransientSolver& solver);
 
 }  // namespace crackle::transient

@@ -1,6 +1,8 @@
 // External loads, MODEL.md eq. (25b).
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
+
 #include "core/errors.hpp"
 #include "fem/loads.hpp"
 #include "fem_meshes.hpp"

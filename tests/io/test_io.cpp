@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <cstring>
 #include <regex>
+#include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
 #include "io/csv.hpp"

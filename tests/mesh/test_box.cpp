@@ -209,6 +209,21 @@ TEST(BoxMesh, CrackChecks) {
   EXPECT_THROW(build_box_mesh(box, crack), InputError);
 }
 
+TEST(BoxMesh, CrackChecksOnAHugeGridBuildNoLines) {
+  // 1e9 cells along the normal: the grid plane is found without the 8 GB of lines (the scene is
+  // refused later, by the memory estimate).
+  BoxSpec box = beam_box(1);
+  box.cells = {1000000000, 1, 1};
+  CrackSpec crack = edge_crack();
+  EXPECT_EQ(check_crack(box, crack), "");
+  box.cells = {1000000, 1, 1};
+  crack.at = 0.05 + 1e-7;  // half-way between two planes 2e-7 apart
+  const std::string message = check_crack(box, crack);
+  EXPECT_NE(message.find("plane.at: expected a grid plane of the mesh, x = 0 + k*2e-7 (nearest 0.05 or 0.0500002)"),
+            std::string::npos)
+      << message;
+}
+
 TEST(BoxMesh, ExtraLinesAreMergedWithCrackEdges) {
   BoxSpec box = beam_box(1);
   box.extra_lines[kZ] = {0.007, 0.008, 0.01, 0.02, 0.008};  // repeat, boundary, outside: ignored

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 #include <vector>
+#include <nlohmann/json.hpp>
 
 #include "spectral/harmonics.hpp"
 #include "spectral/signature.hpp"

@@ -4,6 +4,7 @@
 #include <complex>
 #include <cstdio>
 #include <vector>
+#include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
 #include "spectral/ringdown.hpp"

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <iostream>
 #include <set>
+#include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
 #include "scene/schema.hpp"

@@ -1,60 +1,42 @@
-#pragma once
-/// \file Small hand-built meshes for the fem tests (independent of the mesh generator).
-#include <Eigen/Dense>
-#include <array>
-#include <cmath>
-#include <vector>
+#include "fem_meshes.hpp"
 
-#include "core/quadrature.hpp"
-#include "fem/material.hpp"
-#include "mesh/mesh.hpp"
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
 
 namespace crackle::fem::testing {
 
-/// A grid of n[0] x n[1] x n[2] elements of order p on the box [0, L]: the element vertices are moved
-/// by up to `distortion` times the cell size (interior vertices in all directions, boundary
-/// vertices only within their box face or edge, corners fixed), so that the elements are trilinear
-/// but the box faces stay planar; then everything is mapped by x -> affine x + offset.
-/// The element geometry is exactly the trilinear map of its vertices (GLL nodes placed on it).
-struct GridMesh {
-  mesh::Mesh mesh;
-  std::array<int, 3> cells{};
-  Eigen::Matrix3d affine = Eigen::Matrix3d::Identity();
-  Vec3 lengths = Vec3::Ones();
-  /// Volume of the mapped box.
-  double volume() const { return std::abs(affine.determinant()) * lengths.prod(); }
-  /// Element faces on box face f (0..5 = x-, x+, y-, y+, z-, z+).
-  std::vector<mesh::FaceRef> box_faces(int f) const {
-    std::vector<mesh::FaceRef> faces;
-    const int axis = f / 2;
-    const bool upper = f % 2 == 1;
-    for (int ez = 0; ez < cells[2]; ++ez) {
-      for (int ey = 0; ey < cells[1]; ++ey) {
-        for (int ex = 0; ex < cells[0]; ++ex) {
-          const int e[3] = {ex, ey, ez};
-          if (e[axis] == (upper ? cells[axis] - 1 : 0))
-            faces.push_back({ex + cells[0] * (ey + cells[1] * ez), f});
-        }
+double GridMesh::volume() const { return std::abs(affine.determinant()) * lengths.prod(); }
+
+std::vector<mesh::FaceRef> GridMesh::box_faces(int f) const {
+  std::vector<mesh::FaceRef> faces;
+  const int axis = f / 2;
+  const bool upper = f % 2 == 1;
+  for (int ez = 0; ez < cells[2]; ++ez) {
+    for (int ey = 0; ey < cells[1]; ++ey) {
+      for (int ex = 0; ex < cells[0]; ++ex) {
+        const int e[3] = {ex, ey, ez};
+        if (e[axis] == (upper ? cells[axis] - 1 : 0))
+          faces.push_back({ex + cells[0] * (ey + cells[1] * ez), f});
       }
     }
-    return faces;
   }
-  /// Outward unit normal of box face f after the affine map.
-  Vec3 box_normal(int f) const {
-    Vec3 reference = Vec3::Zero();
-    reference[f / 2] = f % 2 == 1 ? 1.0 : -1.0;
-    return (affine.inverse().transpose() * reference).normalized();
-  }
-};
+  return faces;
+}
 
-inline double pseudo_random(unsigned& state) {
+Vec3 GridMesh::box_normal(int f) const {
+  Vec3 reference = Vec3::Zero();
+  reference[f / 2] = f % 2 == 1 ? 1.0 : -1.0;
+  return (affine.inverse().transpose() * reference).normalized();
+}
+
+double pseudo_random(unsigned& state) {
   state = state * 1664525u + 1013904223u;
   return (state >> 8) / double(1u << 24) * 2.0 - 1.0;  // in [-1, 1)
 }
 
-inline GridMesh grid_mesh(int order, std::array<int, 3> cells, Vec3 lengths, double distortion,
-                          const Eigen::Matrix3d& affine = Eigen::Matrix3d::Identity(),
-                          const Vec3& offset = Vec3::Zero(), unsigned seed = 1) {
+GridMesh grid_mesh(int order, std::array<int, 3> cells, Vec3 lengths, double distortion,
+                   const Eigen::Matrix3d& affine, const Vec3& offset, unsigned seed) {
   GridMesh grid;
   grid.cells = cells;
   grid.affine = affine;
@@ -127,8 +109,7 @@ inline GridMesh grid_mesh(int order, std::array<int, 3> cells, Vec3 lengths, dou
   return grid;
 }
 
-/// The identity DOF map (every mesh node its own DOF node).
-inline mesh::DofMap identity_dofs(const mesh::Mesh& mesh) {
+mesh::DofMap identity_dofs(const mesh::Mesh& mesh) {
   mesh::DofMap dofs;
   dofs.n_dof_nodes = mesh.n_nodes();
   dofs.dof_node.resize(mesh.n_nodes());
@@ -136,8 +117,7 @@ inline mesh::DofMap identity_dofs(const mesh::Mesh& mesh) {
   return dofs;
 }
 
-/// A symmetric positive definite, fully anisotropic Voigt stiffness (no zero entries).
-inline Material anisotropic_material(double density = 7800.0) {
+Material anisotropic_material(double density) {
   Material material = isotropic(200e9, 0.3, density, "anisotropic");
   VoigtMatrix perturbation;
   unsigned state = 7;
@@ -148,8 +128,7 @@ inline Material anisotropic_material(double density = 7800.0) {
   return material;
 }
 
-/// A mild shear + rotation + stretch (det > 0).
-inline Eigen::Matrix3d skew_map() {
+Eigen::Matrix3d skew_map() {
   Eigen::Matrix3d affine;
   affine << 1.1, 0.2, -0.1,  //
       0.05, 0.9, 0.15,       //

@@ -1,38 +1,20 @@
-#pragma once
-/// \file Helpers of the transient tests: dense modal reference solutions, frequency estimation.
-#include <Eigen/Dense>
-#include <Eigen/SparseCholesky>
-#include <cmath>
-#include <complex>
-#include <vector>
+#include "transient_testing.hpp"
 
-#include "contact/contact_force.hpp"
-#include "fem/assembly.hpp"
-#include "fem/constraints.hpp"
-#include "mesh/mesh.hpp"
-#include "transient/solver.hpp"
+#include <Eigen/Dense>
+#include <algorithm>
 
 namespace crackle::transient::testing {
 
-/// The crack contact plugged into a problem on the open DOF map, as the run pipeline does; the term
-/// is returned for queries (pairs closed, slipping, forces).
-inline std::shared_ptr<contact::ContactForce> plug_contact(const mesh::Mesh& mesh, TransientProblem& problem,
-                                                           const contact::ContactOptions& options) {
+std::shared_ptr<contact::ContactForce> plug_contact(const mesh::Mesh& mesh, TransientProblem& problem,
+                                                    const contact::ContactOptions& options) {
   auto term = std::make_shared<contact::ContactForce>(mesh, mesh::make_dof_map(mesh, mesh::Variant::open),
                                                       problem.materials, options);
   problem.terms.push_back(term);
   return term;
 }
 
-/// Lowest modes of K phi = omega^2 M phi, M the lumped mass, over the free DOFs (dense solve:
-/// small meshes only). Modes are returned over all DOFs (zero at held ones), M-normalised.
-struct DenseModes {
-  VectorX omega;   ///< ascending [rad/s]
-  MatrixX shapes;  ///< columns
-};
-
-inline DenseModes dense_modes(const SparseMatrix& stiffness, const VectorX& lumped_mass, const fem::Constraints& constraints,
-                              int count) {
+DenseModes dense_modes(const SparseMatrix& stiffness, const VectorX& lumped_mass, const fem::Constraints& constraints,
+                       int count) {
   const Index n_free = constraints.n_free();
   MatrixX a(n_free, n_free);
   const SparseMatrix free = fem::restrict_to_free(stiffness, constraints);
@@ -52,8 +34,7 @@ inline DenseModes dense_modes(const SparseMatrix& stiffness, const VectorX& lump
   return modes;
 }
 
-/// Largest omega of the same problem.
-inline double dense_omega_max(const SparseMatrix& stiffness, const VectorX& lumped_mass, const fem::Constraints& constraints) {
+double dense_omega_max(const SparseMatrix& stiffness, const VectorX& lumped_mass, const fem::Constraints& constraints) {
   const Index n_free = constraints.n_free();
   MatrixX a = MatrixX(fem::restrict_to_free(stiffness, constraints));
   VectorX scale(n_free);
@@ -63,8 +44,7 @@ inline double dense_omega_max(const SparseMatrix& stiffness, const VectorX& lump
   return std::sqrt(solver.eigenvalues().maxCoeff());
 }
 
-/// |DFT| of a Hann-windowed signal (mean removed) at frequency f [Hz].
-inline double windowed_dft(const std::vector<double>& signal, double dt, double frequency) {
+double windowed_dft(const std::vector<double>& signal, double dt, double frequency) {
   const std::size_t n = signal.size();
   double mean = 0.0;
   for (double s : signal) mean += s;
@@ -77,9 +57,7 @@ inline double windowed_dft(const std::vector<double>& signal, double dt, double 
   return std::abs(sum);
 }
 
-/// Frequency of the DFT peak in [low, high] [Hz]: scan on the resolution grid 1/T, then refine
-/// the peak by golden-section search of the continuous (windowed) DFT.
-inline double dominant_frequency(const std::vector<double>& signal, double dt, double low, double high) {
+double dominant_frequency(const std::vector<double>& signal, double dt, double low, double high) {
   const double duration = dt * static_cast<double>(signal.size());
   const double resolution = 1.0 / duration;
   double best = low, best_value = -1.0;
@@ -103,8 +81,7 @@ inline double dominant_frequency(const std::vector<double>& signal, double dt, d
   return 0.5 * (a + b);
 }
 
-/// Frequency from upward zero crossings of (signal - mean), linearly interpolated [Hz].
-inline double zero_crossing_frequency(const std::vector<double>& signal, double dt) {
+double zero_crossing_frequency(const std::vector<double>& signal, double dt) {
   double mean = 0.0;
   for (double s : signal) mean += s;
   mean /= static_cast<double>(signal.size());

@@ -1,29 +1,12 @@
-#pragma once
-/// \file Helpers of the Gmsh and composite tests: mesh files, node matching by coordinates, matrices
-/// compared under a node permutation, and a small shift-invert subspace eigen-solver (Eigen's
-/// CHOLMOD wrapper; independent of the modal module).
-#include <Eigen/Dense>
-#include <Eigen/CholmodSupport>
-#include <array>
-#include <cmath>
-#include <map>
-#include <string>
-#include <vector>
+#include "gmsh_testing.hpp"
 
-#include "fem/assembly.hpp"
-#include "fem/constraints.hpp"
-#include "fem/material.hpp"
-#include "mesh/mesh.hpp"
+#include <Eigen/CholmodSupport>
+#include <Eigen/Dense>
+#include <algorithm>
 
 namespace crackle::testing {
 
-inline std::string mesh_file(const std::string& name) { return std::string(CRACKLE_SOURCE_DIR) + "/data/meshes/" + name; }
-
-inline fem::Materials steel() { return {fem::isotropic(210e9, 0.3, 7850.0, "steel")}; }
-
-/// For each node of `a`, the node of `b` at the same place (-1 if none); coordinates rounded to
-/// 1e-9 m. Among coincident nodes (a crack's copies) the first is taken.
-inline std::vector<Index> match_nodes(const mesh::Mesh& a, const mesh::Mesh& b) {
+std::vector<Index> match_nodes(const mesh::Mesh& a, const mesh::Mesh& b) {
   auto key = [](const Vec3& x) {
     return std::array<long long, 3>{std::llround(x[0] * 1e9), std::llround(x[1] * 1e9), std::llround(x[2] * 1e9)};
   };
@@ -37,8 +20,7 @@ inline std::vector<Index> match_nodes(const mesh::Mesh& a, const mesh::Mesh& b) 
   return match;
 }
 
-/// max |A(i, j) - B(p(i), p(j))| / max |B| over DOFs, with p the DOF permutation of `dof_match`.
-inline double permuted_difference(const SparseMatrix& a, const SparseMatrix& b, const std::vector<Index>& dof_match) {
+double permuted_difference(const SparseMatrix& a, const SparseMatrix& b, const std::vector<Index>& dof_match) {
   const MatrixX dense_b = MatrixX(b);
   MatrixX dense_a = MatrixX(a);
   double difference = 0.0;
@@ -50,8 +32,7 @@ inline double permuted_difference(const SparseMatrix& a, const SparseMatrix& b, 
   return difference / dense_b.cwiseAbs().maxCoeff();
 }
 
-/// The DOF of `b` for each DOF of `a`, from a node match (every node must match).
-inline std::vector<Index> dof_match(const mesh::DofMap& a_dofs, const mesh::DofMap& b_dofs, const std::vector<Index>& nodes) {
+std::vector<Index> dof_match(const mesh::DofMap& a_dofs, const mesh::DofMap& b_dofs, const std::vector<Index>& nodes) {
   std::vector<Index> match(a_dofs.n_dofs(), -1);
   for (std::size_t n = 0; n < nodes.size(); ++n) {
     for (int c = 0; c < 3; ++c) match[a_dofs.dof(static_cast<Index>(n), c)] = b_dofs.dof(nodes[n], c);
@@ -59,9 +40,7 @@ inline std::vector<Index> dof_match(const mesh::DofMap& a_dofs, const mesh::DofM
   return match;
 }
 
-/// The `count` lowest eigenvalues of K x = lambda M x (K, M symmetric, K - shift M positive
-/// definite) by shift-invert subspace iteration with Rayleigh–Ritz, converged to ~1e-11 (enough for 1e-10 comparisons: Ritz values converge quadratically).
-inline VectorX lowest_eigenvalues(const SparseMatrix& stiffness, const SparseMatrix& mass, int count, double shift = 0.0) {
+VectorX lowest_eigenvalues(const SparseMatrix& stiffness, const SparseMatrix& mass, int count, double shift) {
   using ColumnMatrix = Eigen::SparseMatrix<double>;
   const ColumnMatrix k = stiffness, m = mass;
   const ColumnMatrix shifted = k - shift * m;
@@ -96,9 +75,8 @@ inline VectorX lowest_eigenvalues(const SparseMatrix& stiffness, const SparseMat
   return values;
 }
 
-/// The `count` lowest frequencies [Hz] of a constrained body: K phi = omega^2 M phi over the free DOFs.
-inline VectorX lowest_frequencies(const mesh::Mesh& mesh, mesh::Variant variant, const fem::Materials& materials,
-                                  const std::vector<fem::DirichletCondition>& conditions, int count) {
+VectorX lowest_frequencies(const mesh::Mesh& mesh, mesh::Variant variant, const fem::Materials& materials,
+                           const std::vector<fem::DirichletCondition>& conditions, int count) {
   const mesh::DofMap dofs = mesh::make_dof_map(mesh, variant);
   const fem::Constraints constraints = fem::make_constraints(dofs, conditions);
   const SparseMatrix k = fem::restrict_to_free(fem::assemble_stiffness(mesh, dofs, materials), constraints);
@@ -107,7 +85,7 @@ inline VectorX lowest_frequencies(const mesh::Mesh& mesh, mesh::Variant variant,
   return lambda.cwiseSqrt() / (2.0 * M_PI);
 }
 
-inline fem::DirichletCondition clamp(const std::vector<Index>& nodes, std::vector<int> components = {0, 1, 2}) {
+fem::DirichletCondition clamp(const std::vector<Index>& nodes, std::vector<int> components) {
   fem::DirichletCondition condition;
   condition.nodes = nodes;
   condition.components = components;
