@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 
 namespace crackle::accuracy {
@@ -26,6 +27,12 @@ Component three_level(const std::string& name, double q1, double q2, double q3, 
   component.name = name;
   component.value = q3;
   component.refined = q3;
+  if (!std::isfinite(q1) || !std::isfinite(q2) || !std::isfinite(q3)) {
+    component.delta = std::numeric_limits<double>::quiet_NaN();
+    component.verified = component.asymptotic = false;
+    component.reason = "a level has no finite value";
+    return component;
+  }
   const double e21 = q2 - q1, e32 = q3 - q2;
   if (e21 == 0.0 && e32 == 0.0) {
     component.delta = 0.0;
@@ -67,6 +74,12 @@ Component one_refinement(const std::string& name, double value, double refined, 
   component.value = value;
   component.refined = refined;
   const double change = refined - value;
+  if (!std::isfinite(value) || !std::isfinite(refined)) {
+    component.delta = std::numeric_limits<double>::quiet_NaN();
+    component.verified = component.asymptotic = false;
+    component.reason = "the refinement has no finite value";
+    return component;
+  }
   if (order > 0.0 && refinement > 1.0) {
     const double rp = std::pow(refinement, order);
     component.observed_order = 0.0;
@@ -94,8 +107,10 @@ Estimate combine(const std::string& quantity, double value, std::vector<Componen
   estimate.value = value;
   double squares = 0.0;
   for (const Component& component : components) {
-    estimate.sum += std::abs(component.delta);
-    squares += component.delta * component.delta;
+    if (std::isfinite(component.delta)) {
+      estimate.sum += std::abs(component.delta);
+      squares += component.delta * component.delta;
+    }
     estimate.asymptotic = estimate.asymptotic && component.asymptotic;
     estimate.verified = estimate.verified && component.verified;
     if (!component.reason.empty() && !component.verified) estimate.reasons.push_back(component.name + ": " + component.reason);

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <iostream>
 #include <iomanip>
+#include <limits>
 #include <map>
 
 #include "accuracy/estimate.hpp"
@@ -187,6 +188,7 @@ class Runs {
 /// excitation mode's f_uncracked, f_open, f_bilinear (q = 0, 1, 2).
 double signature(const RunOutcome& outcome, int probe, int q) {
   if (probe < 0) {
+    if (!outcome.mode) return std::numeric_limits<double>::quiet_NaN();  // not paired on this level
     const ModeSignature& mode = *outcome.mode;
     return q == 0 ? mode.f_uncracked : q == 1 ? mode.f_open : mode.f_bilinear;
   }

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "accuracy/estimate.hpp"
 
@@ -33,6 +34,17 @@ TEST(ThreeLevel, ARefinementThatDoesNotConvergeMonotonicallyIsNotVerified) {
   const Component growing = three_level("mesh", 1.0, 1.01, 1.05, 2.0, 0.5, 8.0);
   EXPECT_FALSE(growing.verified);
   EXPECT_NE(growing.reason.find("not converging"), std::string::npos);
+}
+
+TEST(ThreeLevel, ALevelWithoutAValueIsNotVerifiedAndLeavesTheSumFinite) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const Component missing = three_level("mesh", nan, 1.0, 1.01, 2.0, 0.5, 8.0);
+  EXPECT_FALSE(missing.verified);
+  EXPECT_NE(missing.reason.find("no finite value"), std::string::npos);
+  const Estimate estimate = combine("f_b", 1.01, {missing, one_refinement("steps", 1.0, 1.01, 2.0, 2.0)});
+  EXPECT_FALSE(estimate.verified);
+  EXPECT_TRUE(std::isfinite(estimate.sum));
+  EXPECT_GT(estimate.sum, 0.0);
 }
 
 TEST(ThreeLevel, AnOrderFarOutsideItsRangeIsNotVerifiedAndSlightlyOutsideIsCautious) {
