@@ -73,8 +73,6 @@ Plan accuracy_plan(const scene::Scene& scene, const RunRoute& route) {
   return plan;
 }
 
-std::string number_text(double value) { return format_number(value); }
-
 /// The runs of one `crackle run` with its estimate: each setting run once, the first (the scene's
 /// own) into the output folder with its progress, the others silent in temporary folders.
 class Runs {
@@ -162,11 +160,11 @@ class Runs {
     if (setting.band) {
       const int modes = scene_.transient->reduced.modes;
       if (modes > 0) levels.push_back({"transient.reduced.modes", std::to_string(modes << setting.band)});
-      else levels.push_back({"transient.reduced.max_frequency", number_text(base.max_frequency_hz * (1 << setting.band))});
+      else levels.push_back({"transient.reduced.max_frequency", format_number(base.max_frequency_hz * (1 << setting.band))});
     }
     if (setting.steps) levels.push_back({"transient.reduced.steps_per_period", std::to_string(steps_per_period(setting))});
     if (setting.penalty) {
-      levels.push_back({"crack.contact.penalty", number_text(base.normal_penalty * (1 << (2 * setting.penalty)))});
+      levels.push_back({"crack.contact.penalty", format_number(base.normal_penalty * (1 << (2 * setting.penalty)))});
     }
     return levels;
   }
@@ -303,7 +301,7 @@ SettingEstimate estimate_setting(Runs& runs, const Setting& setting, const std::
   auto counts = [&](const std::string& quantity) {
     return std::find(quantities.begin(), quantities.end(), quantity) != quantities.end();
   };
-  auto take = [&](const std::string& label, const accuracy::Estimate& estimate, bool in_tolerance) {
+  auto take = [&](const accuracy::Estimate& estimate, bool in_tolerance) {
     if (!in_tolerance) return;
     result.worst = std::max(result.worst, estimate.sum);
     result.verified = result.verified && estimate.verified;
@@ -311,7 +309,6 @@ SettingEstimate estimate_setting(Runs& runs, const Setting& setting, const std::
       double& largest = result.largest[component.name];
       largest = std::max(largest, std::abs(component.delta));
     }
-    (void)label;
   };
   for (std::size_t p = 0; p < run.probes.size(); ++p) {
     nlohmann::json probe_json = nlohmann::json::object();
@@ -319,7 +316,7 @@ SettingEstimate estimate_setting(Runs& runs, const Setting& setting, const std::
       const std::string quantity = ProbeSignature::kNames[q];
       const accuracy::Estimate estimate = estimate_of(quantity, runs, setting, static_cast<int>(p), q);
       probe_json[quantity] = estimate_json(estimate);
-      take(run.probes[p].name, estimate, counts(quantity));
+      take(estimate, counts(quantity));
       if (q < 3) result.lines.push_back({run.probes[p].name, estimate});
     }
     result.probes[run.probes[p].name] = probe_json;
@@ -331,7 +328,7 @@ SettingEstimate estimate_setting(Runs& runs, const Setting& setting, const std::
       const accuracy::Estimate estimate = estimate_of(names[q], runs, setting, -1, q);
       result.mode[names[q]] = estimate_json(estimate);
       if (q == 2) {
-        take("mode " + std::to_string(run.mode->mode), estimate, counts("f_b"));
+        take(estimate, counts("f_b"));
         result.lines.push_back({"mode " + std::to_string(run.mode->mode), estimate});
       }
     }
@@ -376,7 +373,7 @@ std::optional<Setting> refine(Runs& runs, const Setting& setting, const SettingE
     return std::nullopt;
   }
   if (best->cost > budget_left) {
-    blocking = best->name + " (its refinement run, about " + number_text(std::round(best->cost)) +
+    blocking = best->name + " (its refinement run, about " + format_number(std::round(best->cost)) +
                " s, exceeds what is left of accuracy.budget)";
     return std::nullopt;
   }
