@@ -19,6 +19,7 @@
 #include "scene/scene.hpp"
 #include "scene/yaml_text.hpp"
 #include "study/plan.hpp"
+#include "identify/identify.hpp"
 #include "study/study.hpp"
 
 namespace {
@@ -268,15 +269,31 @@ int main(int argc, char** argv) {
                             "Stop a case after this many seconds (default: no limit)")
       ->check(above(0, false, "a positive number of seconds"));
 
+  identify::IdentifyOptions identify_options;
+  identify_options.executable = "/proc/self/exe";
+  CLI::App* identify_command = cli.add_subcommand(
+      "identify", "Damage identification: the unknowns of the scene's identify: section (crack position, depth, ...) "
+                  "from its measured signatures, with 95 % intervals; writes identify.json, identify_map.csv, "
+                  "identify_map.png and identify_fit.png. The forward runs are study cases (parallel, resumable)");
+  identify_command->add_option("scene", identify_options.scene_path, "Scene file (YAML) with an identify: section")
+      ->required();
+  identify_command->add_option("-o,--output", identify_options.output_dir, "Output directory")->required();
+  identify_command->add_option("-j,--jobs", identify_options.jobs, "Forward runs at a time (default: the cores)")
+      ->check(above(0, true, "a positive integer"));
+  identify_command->add_option("--map-cache", identify_options.map_cache,
+                               "Folder of the map's forward runs, kept for the next measurement set of the same design");
+
   CLI::App* format_command =
       cli.add_subcommand("scene-format", "Print the reference of every scene key (Markdown)");
-  for (CLI::App* command : {check_command, modal_command, run_command, sweep_command, study_command, format_command})
+  for (CLI::App* command :
+       {check_command, modal_command, run_command, sweep_command, study_command, identify_command, format_command})
     command->allow_extras();
 
   // Crackle's own arguments before `--`, PETSc's after it.
   SplitArguments arguments = split_arguments(argc, argv);
   std::vector<std::string> commands;
-  for (const CLI::App* command : {check_command, modal_command, run_command, sweep_command, study_command, format_command})
+  for (const CLI::App* command :
+       {check_command, modal_command, run_command, sweep_command, study_command, identify_command, format_command})
     commands.push_back(command->get_name());
   if (arguments.own.size() > 1 && arguments.own[1][0] != '-' &&
       std::find(commands.begin(), commands.end(), arguments.own[1]) == commands.end()) {
@@ -344,6 +361,7 @@ int main(int argc, char** argv) {
       study_options.modal_cache = !no_modal_cache;
       return study::run_study(study_options, std::cerr);
     }
+    if (*identify_command) identify::run_identify(identify_options, std::cerr);
     if (*format_command) std::cout << scene::scene_format_markdown();
   } catch (const std::bad_alloc&) {
     if (quiet_rank) return kExitOutOfMemory;

@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 packages=(
   g++ cmake make ninja-build pkg-config
   libeigen3-dev libpetsc-real-dev libptscotch-dev libslepc-real-dev libarpack2-dev libfftw3-dev
-  libsuitesparse-dev libyaml-cpp-dev libgtest-dev libcli11-dev nlohmann-json3-dev
+  libsuitesparse-dev libceres-dev libyaml-cpp-dev libgtest-dev libcli11-dev nlohmann-json3-dev
   libopenblas0-pthread openmpi-bin gnuplot-nox
 )
 missing=()

@@ -130,7 +130,7 @@ const std::array<std::string, 6>& box_face_names() {
   return names;
 }
 
-std::string check_crack(const BoxSpec& box, const CrackSpec& crack) {
+std::string check_crack(const BoxSpec& box, const CrackSpec& crack, bool on_uniform_plane) {
   const int normal = crack.normal;
   const double low = box.origin[normal];
   const double high = low + box.size[normal];
@@ -139,7 +139,7 @@ std::string check_crack(const BoxSpec& box, const CrackSpec& crack) {
     return "plane.at: expected a position strictly inside the body, " + axis + " in (" +
            format_number(low) + ", " + format_number(high) + "), got " + format_number(crack.at);
   }
-  if (find_uniform_line(box, normal, crack.at, tolerance(box, normal)) < 0) {
+  if (on_uniform_plane && find_uniform_line(box, normal, crack.at, tolerance(box, normal)) < 0) {
     const double spacing = box.size[normal] / box.cells[normal];
     const int below = static_cast<int>(std::floor((crack.at - low) / spacing));
     return "plane.at: expected a grid plane of the mesh, " + axis + " = " + format_number(low) +
@@ -161,6 +161,67 @@ std::string check_crack(const BoxSpec& box, const CrackSpec& crack) {
     }
   }
   return "";
+}
+
+std::array<std::vector<double>, 3> morph_lines(const BoxSpec& box, const std::array<std::vector<double>, 3>& lines,
+                                               const CrackSpec& from, const CrackSpec& to,
+                                               const std::array<std::vector<double>, 3>& fixed,
+                                               const std::string& key) {
+  if (from.normal != to.normal) {
+    throw InputError(key + ": expected the crack's own normal " + axis_name(to.normal) + ", got " +
+                     axis_name(from.normal));
+  }
+  std::array<std::vector<double>, 3> moved = lines;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double low = box.origin[axis], high = low + box.size[axis], tol = tolerance(box, axis);
+    // Knots (reference position, moved position): the ends and the fixed lines stay.
+    std::vector<std::pair<double, double>> knots = {{low, low}, {high, high}};
+    for (double line : fixed[axis])
+      if (line > low + tol && line < high - tol) knots.push_back({line, line});
+    const std::string name = axis == from.normal ? "at" : std::string("region.") + axis_name(axis);
+    std::vector<std::pair<double, double>> moving;
+    if (axis == from.normal) {
+      moving.push_back({from.at, to.at});
+    } else {
+      for (int end = 0; end < 2; ++end) {
+        const double a = from.region[axis][end], b = to.region[axis][end];
+        const bool a_inside = a > low + tol && a < high - tol, b_inside = b > low + tol && b < high - tol;
+        if (a_inside != b_inside) {
+          throw InputError(key + "." + name + ": expected an edge " +
+                           (a_inside ? "inside the body, as the crack's own " : "on the body's surface, as the crack's own ") +
+                           format_number(b) + ", got " + format_number(a));
+        }
+        if (a_inside) moving.push_back({a, b});
+      }
+    }
+    for (const auto& knot : moving) {
+      if (!(knot.second > low + tol && knot.second < high - tol)) {
+        throw InputError(key + "." + name + ": the crack's position " + format_number(knot.second) +
+                         " is not strictly inside the body " + range_text(low, high));
+      }
+      knots.push_back(knot);
+    }
+    std::sort(knots.begin(), knots.end());
+    for (std::size_t k = 0; k + 1 < knots.size(); ++k) {
+      if (!(knots[k + 1].first - knots[k].first > tol) || !(knots[k + 1].second - knots[k].second > tol)) {
+        throw InputError(key + "." + name + ": moving the grid from the reference crack to the crack at " +
+                         format_number(knots[k + 1].second) + " would pass the grid line at " +
+                         format_number(knots[k].second) + " (the body's end, mesh.box.lines, a material region "
+                         "or another crack edge); give a reference crack on the same side of it");
+      }
+    }
+    for (double& line : moved[axis]) {
+      const auto upper = std::upper_bound(knots.begin(), knots.end(), std::make_pair(line, 0.0),
+                                          [](const auto& a, const auto& b) { return a.first < b.first; });
+      if (upper == knots.begin()) continue;
+      if (upper == knots.end()) { line = high; continue; }
+      const auto& a = *(upper - 1);
+      const auto& b = *upper;
+      if (std::abs(line - a.first) <= tol) { line = a.second; continue; }
+      line = a.second + (line - a.first) * (b.second - a.second) / (b.first - a.first);
+    }
+  }
+  return moved;
 }
 
 std::array<std::vector<double>, 3> crack_fronts(const BoxSpec& box, const CrackSpec& crack) {
@@ -230,7 +291,7 @@ Mesh build_box_mesh(const BoxSpec& box, const std::array<std::vector<double>, 3>
     throw InputError("mesh.box.order: expected an integer in 1..4, got " + std::to_string(box.order));
   }
   if (crack) {
-    std::string problem = check_crack(box, *crack);
+    std::string problem = check_crack(box, *crack, false);
     if (!problem.empty()) throw InputError("crack." + problem);
   }
   const int p = box.order;
@@ -307,6 +368,10 @@ Mesh build_box_mesh(const BoxSpec& box, const std::array<std::vector<double>, 3>
   const int normal = crack->normal;
   const auto [t1, t2] = in_plane_axes(normal);
   const int plane_cell = find_line(lines[normal], crack->at, tolerance(box, normal));
+  if (plane_cell < 0) {
+    throw InputError(std::string("crack.plane.at: expected a grid plane of the mesh, got ") + axis_name(normal) +
+                     " = " + format_number(crack->at));
+  }
   const Index plane_index = static_cast<Index>(p) * plane_cell;
   std::array<std::array<int, 2>, 3> region_cells{};  // first and one-past-last cell of the region
   for (int t : {t1, t2}) {

@@ -68,9 +68,25 @@ std::array<std::vector<double>, 3> grid_lines(const BoxSpec& box, const std::opt
 
 /// What is wrong with a crack in a box, or an empty string if nothing is. The first word of the
 /// message is the key it concerns ("plane" or "region"), for the scene loader to point at.
-std::string check_crack(const BoxSpec& box, const CrackSpec& crack);
+/// `on_uniform_plane`: the plane must also be a plane of the uniform grid (origin + k size/cells);
+/// false for a crack the grid is moved to (morph_lines), which may lie anywhere inside the body.
+std::string check_crack(const BoxSpec& box, const CrackSpec& crack, bool on_uniform_plane = true);
 
-/// Meshes a box with the given grid lines (ascending, at least two per axis) and an optional crack.
+/// Grid lines made for the crack `from`, moved so that its plane and front edges land on those of
+/// the crack `to` (same normal): along each axis the map is piecewise linear between knots (the
+/// body's ends and `fixed[axis]`, which stay; the crack plane along the normal and the region edges
+/// inside the body along the in-plane axes, which move), so every cell keeps its place in the
+/// topology and stretches or shrinks with its interval. A mesh built on the result depends smoothly
+/// on the crack's position and size (the forward model of `crackle identify`; a remeshed crack would
+/// jump from line to line). Positions of `to` that are not strictly inside the body, or that would
+/// pass a fixed line or each other, throw InputError naming `key` (the scene key of the reference).
+std::array<std::vector<double>, 3> morph_lines(const BoxSpec& box, const std::array<std::vector<double>, 3>& lines,
+                                               const CrackSpec& from, const CrackSpec& to,
+                                               const std::array<std::vector<double>, 3>& fixed,
+                                               const std::string& key = "crack.reference");
+
+/// Meshes a box with the given grid lines (ascending, at least two per axis) and an optional crack,
+/// whose plane and edges must be among the lines (the plane need not be a uniform grid plane).
 /// Throws InputError if check_crack() finds a problem.
 Mesh build_box_mesh(const BoxSpec& box, const std::array<std::vector<double>, 3>& lines,
                     const std::optional<CrackSpec>& crack);

@@ -30,7 +30,10 @@ mesh::Grading box_grading(const scene::Scene& scene, MeshUse use) {
 std::array<std::vector<double>, 3> box_lines(const scene::Scene& scene, MeshUse use) {
   mesh::BoxSpec box = scene.box;
   box.grading = box_grading(scene, use);
-  std::array<std::vector<double>, 3> lines = mesh::grid_lines(box, scene.crack);
+  // With crack.reference the lines are made for the reference crack, then moved onto the crack.
+  const std::optional<mesh::CrackSpec>& made_for = scene.crack_reference ? scene.crack_reference : scene.crack;
+  std::array<std::vector<double>, 3> lines = mesh::grid_lines(box, made_for);
+  std::array<std::vector<double>, 3> fixed = box.extra_lines;
   for (int axis = 0; axis < 3; ++axis) {
     const double low = scene.box.origin[axis], high = low + scene.box.size[axis];
     const double tolerance = kRegionTolerance * scene.box.size[axis];
@@ -38,6 +41,7 @@ std::array<std::vector<double>, 3> box_lines(const scene::Scene& scene, MeshUse 
       if (!material.region.range[axis]) continue;
       for (double end : *material.region.range[axis]) {
         if (end <= low + tolerance || end >= high - tolerance) continue;
+        fixed[axis].push_back(end);
         std::vector<double>& line = lines[axis];
         const auto next = std::lower_bound(line.begin(), line.end(), end);
         if (next != line.end() && *next - end <= tolerance) continue;
@@ -46,6 +50,7 @@ std::array<std::vector<double>, 3> box_lines(const scene::Scene& scene, MeshUse 
       }
     }
   }
+  if (scene.crack_reference) lines = mesh::morph_lines(box, lines, *scene.crack_reference, *scene.crack, fixed);
   return lines;
 }
 

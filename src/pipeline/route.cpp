@@ -83,8 +83,10 @@ std::array<int, 3> route_cells(const scene::Scene& scene) {
       cells[axis] = target;
       continue;
     }
-    // The crack plane must stay a grid plane: the fewest cells from the target up that keep it one.
-    const double position = (scene.crack->at - box.origin[axis]) / box.size[axis];
+    // The crack plane (of the reference crack the grid is made for, crack.reference) must stay a
+    // grid plane: the fewest cells from the target up that keep it one.
+    const double at = scene.crack_reference ? scene.crack_reference->at : scene.crack->at;
+    const double position = (at - box.origin[axis]) / box.size[axis];
     for (int n = target; n <= box.cells[axis]; ++n) {
       if (std::abs(position * n - std::round(position * n)) < 1e-9 * n) {
         cells[axis] = n;

@@ -153,6 +153,20 @@ Param build_parameters() {
         number("y", "Extent along y.").with_unit("m").list(2),
         number("z", "Extent along z.").with_unit("m").list(2),
       }).optional_section(),
+      map_of("reference", "The crack the box grid is made for, when it differs from the crack itself: the grid lines "
+                          "(crack edges, grading) are placed for this crack, then moved piecewise linearly along each "
+                          "axis so that they land on the crack's own plane and edges. The topology then does not "
+                          "depend on where the crack is, and results change smoothly with its position and size "
+                          "(`crackle identify` sets it to the middle of its bounds). The crack's own plane may then "
+                          "lie anywhere inside the body.", {
+        number("at", "Plane position of the reference crack; default: the crack's own (must be a grid plane).")
+            .with_unit("m"),
+        map_of("region", "Extent of the reference crack; each axis defaults to the crack's own.", {
+          number("x", "Extent along x.").with_unit("m").list(2),
+          number("y", "Extent along y.").with_unit("m").list(2),
+          number("z", "Extent along z.").with_unit("m").list(2),
+        }).optional_section(),
+      }).optional_section(),
       text("group", "Physical surface group of a Gmsh mesh: its nodes are split except on the crack front."),
       number("gap", "Initial normal gap g0 (MODEL.md eq. 9): > 0 open, < 0 pre-compressed.").with_unit("m")
           .defaults_to("0"),
@@ -449,9 +463,30 @@ mesh::CrackSpec crack_from(const Values& values, const mesh::BoxSpec& box) {
     const auto& range = values.numbers("crack.region." + axis);
     crack.region[axis_index(axis)] = {range[0], range[1]};
   }
-  const std::string problem = mesh::check_crack(box, crack);
+  const bool has_reference = values.has("crack.reference");
+  const std::string problem = mesh::check_crack(box, crack, !has_reference);
   if (!problem.empty()) values.fail("crack." + problem.substr(0, problem.find(':')), "crack." + problem);
   return crack;
+}
+
+/// `crack.reference`: the crack the grid is made for (its keys default to the crack's own).
+std::optional<mesh::CrackSpec> reference_crack_from(const Values& values, const mesh::BoxSpec& box,
+                                                    const mesh::CrackSpec& crack) {
+  if (!values.has("crack.reference")) return std::nullopt;
+  mesh::CrackSpec reference = crack;
+  if (values.has("crack.reference.at")) reference.at = values.number("crack.reference.at");
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::string key = "crack.reference.region." + kAxes[axis];
+    if (!values.has(key)) continue;
+    if (axis == crack.normal) {
+      values.fail(key, "the in-plane axes of the crack's region", kAxes[axis] + " (the crack's normal)");
+    }
+    const auto& range = values.numbers(key);
+    reference.region[axis] = {range[0], range[1]};
+  }
+  const std::string problem = mesh::check_crack(box, reference);
+  if (!problem.empty()) values.fail("crack.reference." + problem.substr(0, problem.find(':')), "crack.reference." + problem);
+  return reference;
 }
 
 /// A mesh file named in a scene, relative to the scene file's folder unless absolute.
@@ -846,8 +881,8 @@ Scene scene_from(const Values& values) {
 
   if (values.has("crack")) {
     if (values.has("crack.group")) {
-      if (values.has("crack.plane") || values.has("crack.region")) {
-        values.fail("crack.group", "either group or plane and region", "both");
+      if (values.has("crack.plane") || values.has("crack.region") || values.has("crack.reference")) {
+        values.fail("crack.group", "either group or plane and region (and reference)", "both");
       }
       if (scene.gmsh_file.empty()) {
         values.fail("crack.group", "plane and region (a box mesh has no groups; group needs mesh.gmsh)",
@@ -865,6 +900,7 @@ Scene scene_from(const Values& values) {
         }
       }
       scene.crack = crack_from(values, scene.box);
+      scene.crack_reference = reference_crack_from(values, scene.box, *scene.crack);
     }
   }
 
@@ -930,6 +966,8 @@ Scene parse_scene(const std::string& text, const std::string& name, const std::v
   // `study:` belongs to the study driver (src/study), which validates it itself; a single run of a
   // study's base scene ignores it.
   if (document.IsMap() && document["study"]) document.remove("study");
+  // `identify:` likewise belongs to `crackle identify` (src/identify).
+  if (document.IsMap() && document["identify"]) document.remove("identify");
   for (const Override& change : overrides) apply_override(document, change.path, change.value, name);
   return scene_from(validate(scene_parameters(), document, name));
 }

@@ -221,6 +221,8 @@ struct Scene {
   std::vector<MaterialEntrySection> materials;
   std::vector<BoundarySection> boundary;
   std::optional<mesh::CrackSpec> crack;
+  /// `crack.reference`: the crack the box grid is made for, moved onto `crack` (mesh::morph_lines).
+  std::optional<mesh::CrackSpec> crack_reference;
   std::optional<GroupCrackSection> crack_group;  ///< `crack: {group: ...}` of a Gmsh mesh
   bool has_crack() const { return crack || crack_group; }
   ContactSection contact;

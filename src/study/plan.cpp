@@ -576,7 +576,11 @@ StudyPlan plan_study(const std::string& text, const std::string& file) {
   // One mesh for all cases: the union of their crack edges as extra grid lines, when the scene
   // format has mesh.box.lines (otherwise each case meshes its own crack edges).
   const YAML::Node base_document = scene::parse_yaml(plan.base_text, file);
-  if (format_has_grid_lines()) {
+  // Cases whose grid is made for one reference crack (crack.reference) share its topology already.
+  const bool morphed = !scenes.empty() && std::all_of(scenes.begin(), scenes.end(), [](const scene::Scene& s) {
+    return s.crack_reference.has_value();
+  });
+  if (format_has_grid_lines() && !morphed) {
     const auto lines = shared_crack_lines(scenes);
     for (int axis = 0; axis < 3; ++axis) {
       if (lines[axis].empty()) continue;
@@ -605,7 +609,7 @@ StudyPlan plan_study(const std::string& text, const std::string& file) {
 
   // Graded meshes: every case grades towards the fronts of all cases (from the same grid), so
   // that the cases still share one mesh.
-  if (const std::string grading = shared_grading(scenes); !grading.empty()) {
+  if (const std::string grading = morphed ? std::string() : shared_grading(scenes); !grading.empty()) {
     for (StudyCase& study_case : plan.cases) study_case.overrides.push_back({"mesh.box.grading", grading});
     plan.shares_grid_lines = true;
   }

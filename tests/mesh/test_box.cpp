@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <numeric>
 #include <set>
 
@@ -235,4 +236,55 @@ TEST(BoxMesh, ExtraLinesAreMergedWithCrackEdges) {
   Mesh plain = build_box_mesh(box);
   EXPECT_EQ(cracked.n_elements(), plain.n_elements());
   EXPECT_EQ(cracked.n_original_nodes, plain.n_nodes());
+}
+
+TEST(MorphLines, MovesTheCrackLinesOntoTheCrackAndKeepsTheTopology) {
+  BoxSpec box = beam_box(2);
+  box.grading.layers = 2;
+  const CrackSpec reference = edge_crack();
+  const auto lines = grid_lines(box, reference);
+  // The same crack: nothing moves.
+  const auto same = morph_lines(box, lines, reference, reference, {});
+  for (int axis = 0; axis < 3; ++axis) {
+    ASSERT_EQ(same[axis].size(), lines[axis].size());
+    for (std::size_t i = 0; i < lines[axis].size(); ++i) EXPECT_NEAR(same[axis][i], lines[axis][i], 1e-15);
+  }
+  // Another crack (off the uniform grid, deeper): same number of lines, the crack's plane and edge on them,
+  // the ends and the fixed line x = 0.15 where they were, lines still ascending.
+  CrackSpec moved = reference;
+  moved.at = 0.0613;
+  moved.region[kZ] = {0.0061, 0.01};
+  const auto result = morph_lines(box, lines, reference, moved, {{{0.15}, {}, {}}});
+  for (int axis = 0; axis < 3; ++axis) {
+    ASSERT_EQ(result[axis].size(), lines[axis].size());
+    EXPECT_TRUE(std::is_sorted(result[axis].begin(), result[axis].end()));
+    EXPECT_DOUBLE_EQ(result[axis].front(), lines[axis].front());
+    EXPECT_DOUBLE_EQ(result[axis].back(), lines[axis].back());
+  }
+  EXPECT_NE(std::find(result[kX].begin(), result[kX].end(), 0.0613), result[kX].end());
+  EXPECT_NE(std::find(result[kX].begin(), result[kX].end(), 0.15), result[kX].end());
+  EXPECT_NE(std::find(result[kZ].begin(), result[kZ].end(), 0.0061), result[kZ].end());
+  // The mesh on the moved lines has the moved crack, with the same pairs and the moved area.
+  const Mesh base = build_box_mesh(box, lines, reference);
+  const Mesh mesh = build_box_mesh(box, result, moved);
+  EXPECT_EQ(mesh.n_nodes(), base.n_nodes());
+  EXPECT_EQ(mesh.crack_pairs.size(), base.crack_pairs.size());
+  EXPECT_NEAR(total_pair_area(mesh), 0.02 * (0.01 - 0.0061), 1e-15);
+}
+
+TEST(MorphLines, RefusesACrackThatWouldPassAFixedLine) {
+  const BoxSpec box = beam_box(1);
+  const CrackSpec reference = edge_crack();
+  CrackSpec moved = reference;
+  moved.at = 0.17;
+  try {
+    morph_lines(box, grid_lines(box, reference), reference, moved, {{{0.15}, {}, {}}});
+    FAIL() << "expected InputError";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("crack.reference.at: moving the grid"), std::string::npos) << error.what();
+  }
+  // Without a reference the plane must be a uniform grid plane; with one it may lie anywhere.
+  moved.at = 0.0613;
+  EXPECT_NE(check_crack(box, moved), "");
+  EXPECT_EQ(check_crack(box, moved, false), "");
 }

@@ -1,0 +1,833 @@
+#include "identify/identify.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <ostream>
+#include <set>
+#include <sstream>
+
+#include <Eigen/Cholesky>
+#include <nlohmann/json.hpp>
+
+#include "core/errors.hpp"
+#include "fit/fit.hpp"
+#include "io/files.hpp"
+#include "scene/scene.hpp"
+#include "scene/schema.hpp"
+#include "scene/yaml_text.hpp"
+#include "spectral/plot.hpp"
+#include "study/plan.hpp"
+#include "study/study.hpp"
+
+namespace crackle::identify {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+/// Map minima kept for a local fit: chi^2 within this of the best (3 sigma of one unknown).
+constexpr double kMinimaSpread = 9.0;
+constexpr std::size_t kMaxStarts = 4;
+/// Two fitted minima "fit equally well" when their chi^2 differ by less than this.
+constexpr double kEqualFit = 1.0;
+/// Finite-difference step of the forward model, as a fraction of each bound width: the map shows the
+/// model smooth to ~1e-9 relative (morphed mesh, eigen-solve tolerance 1e-10), sqrt of which is the
+/// classic choice; 1e-4 of a width keeps the truncation error below the noise of a 0.05 % frequency.
+constexpr double kForwardStep = 1e-4;
+/// chi^2 quantile of 2 degrees of freedom at 95 % (the joint region of two unknowns).
+constexpr double kChi2Two95 = 5.991464547107979;
+
+std::string join(const std::vector<std::string>& words, const std::string& separator = ", ") {
+  std::string text;
+  for (std::size_t i = 0; i < words.size(); ++i) text += (i ? separator : "") + words[i];
+  return text;
+}
+
+[[noreturn]] void fail(const std::string& file, int line, const std::string& path, const std::string& expected,
+                       const std::string& got) {
+  scene::fail(file, line, path, expected, got);
+}
+
+bool is_frequency(const std::string& quantity) {
+  const auto& f = frequency_quantities();
+  return std::find(f.begin(), f.end(), quantity) != f.end() || quantity == "damping_ratio";
+}
+
+/// Checks one measurement's own fields (the scene-dependent checks come later).
+void check_measurement(const Measurement& m, const std::string& file, int line, const std::string& path) {
+  const auto& all = all_quantities();
+  if (std::find(all.begin(), all.end(), m.quantity) == all.end()) {
+    fail(file, line, path + ".quantity", "one of " + join(all),
+         "'" + m.quantity + "'" + scene::suggestion(m.quantity, all));
+  }
+  if (is_frequency(m.quantity) && m.mode < 1) fail(file, line, path + ".mode", "a mode number >= 1", "none");
+  if (!is_frequency(m.quantity)) {
+    if (m.probe.empty()) fail(file, line, path + ".probe", "the name of a probe of the scene", "none");
+    if (!(m.drive_hz > 0.0) || !std::isfinite(m.drive_hz))
+      fail(file, line, path + ".drive_hz", "a drive frequency > 0 [Hz]", format_number(m.drive_hz));
+  }
+  if (!std::isfinite(m.value)) fail(file, line, path + ".value", "a finite number", format_number(m.value));
+  if (!(m.sigma > 0.0) || !std::isfinite(m.sigma))
+    fail(file, line, path + ".sigma", "a standard deviation > 0", m.sigma == 0.0 ? "none or 0" : format_number(m.sigma));
+}
+
+double number_of(const YAML::Node& node, const std::string& file, const std::string& path, bool integer = false) {
+  double value = kNaN;
+  if (!node.IsScalar() || !scene::parse_number(node.Scalar(), value) || !std::isfinite(value) ||
+      (integer && value != std::floor(value))) {
+    fail(file, scene::mark_line(node), path, integer ? "an integer" : "a finite number", scene::describe_node(node));
+  }
+  return value;
+}
+
+Measurement measurement_from(const YAML::Node& node, const std::string& file, const std::string& path) {
+  const int line = scene::mark_line(node);
+  if (!node.IsMap()) fail(file, line, path, "a map {quantity, mode or probe and drive_hz, value, sigma}", scene::describe_node(node));
+  Measurement m;
+  m.where = file + ":" + std::to_string(line);
+  const std::vector<std::string> keys = {"quantity", "mode", "probe", "drive_hz", "value", "sigma"};
+  for (const auto& entry : node) {
+    const std::string key = entry.first.Scalar();
+    if (std::find(keys.begin(), keys.end(), key) == keys.end())
+      fail(file, scene::mark_line(entry.first), path + "." + key, "one of " + join(keys),
+           "unknown key '" + key + "'" + scene::suggestion(key, keys));
+  }
+  if (!node["quantity"]) fail(file, line, path + ".quantity", "one of " + join(all_quantities()), "nothing");
+  m.quantity = node["quantity"].Scalar();
+  if (node["mode"]) m.mode = static_cast<int>(number_of(node["mode"], file, path + ".mode", true));
+  if (node["probe"]) m.probe = node["probe"].Scalar();
+  if (node["drive_hz"]) m.drive_hz = number_of(node["drive_hz"], file, path + ".drive_hz");
+  if (!node["value"]) fail(file, line, path + ".value", "the measured value", "nothing");
+  m.value = number_of(node["value"], file, path + ".value");
+  if (node["sigma"]) m.sigma = number_of(node["sigma"], file, path + ".sigma");
+  check_measurement(m, file, line, path);
+  return m;
+}
+
+std::vector<std::string> split_csv(const std::string& line) {
+  std::vector<std::string> cells;
+  std::string cell;
+  for (char c : line) {
+    if (c == ',') {
+      cells.push_back(cell);
+      cell.clear();
+    } else if (c != '\r') {
+      cell += c;
+    }
+  }
+  cells.push_back(cell);
+  for (std::string& text : cells) {
+    const auto first = text.find_first_not_of(" \t"), last = text.find_last_not_of(" \t");
+    text = first == std::string::npos ? "" : text.substr(first, last - first + 1);
+  }
+  return cells;
+}
+
+/// The value of a dotted key path in a document (map keys only), or an undefined node.
+YAML::Node node_at(const YAML::Node& document, const std::string& path) {
+  YAML::Node node = YAML::Clone(document);
+  std::stringstream stream(path);
+  std::string key;
+  while (std::getline(stream, key, '.')) {
+    if (!node.IsMap() || !node[key]) return YAML::Node(YAML::NodeType::Undefined);
+    node = node[key];
+  }
+  return node;
+}
+
+int uniform_index(double at, double origin, double size, int cells) {
+  return static_cast<int>(std::lround((at - origin) / size * cells));
+}
+
+/// The forward model: batches of parameter vectors run as studies of `crackle modal` cases.
+class Forward {
+ public:
+  Forward(const IdentifySpec& spec, YAML::Node base, const IdentifyOptions& options, std::ostream& log)
+      : spec_(spec), base_(std::move(base)), options_(options), log_(log) {}
+
+  /// Model values of every measurement at each theta; `folder` holds the batch's study (a rerun with
+  /// the same parameters reuses its cases). `orders`: a mesh.box.order per theta (empty: the scene's).
+  std::vector<VectorX> models(const std::vector<VectorX>& thetas, const fs::path& folder, bool progress,
+                              const std::vector<int>& orders = {}) {
+    YAML::Node document = YAML::Clone(base_);
+    YAML::Node vary(YAML::NodeType::Map);
+    std::map<std::string, std::vector<std::string>> values;
+    std::vector<std::string> order_of_paths;
+    for (const VectorX& theta : thetas) {
+      std::map<std::string, YAML::Node> lists;
+      for (std::size_t j = 0; j < spec_.unknowns.size(); ++j) {
+        const Unknown& u = spec_.unknowns[j];
+        if (u.index < 0) {
+          values[u.path].push_back(format_number(theta[static_cast<Eigen::Index>(j)]));
+          continue;
+        }
+        if (!lists.count(u.path)) lists[u.path] = YAML::Clone(node_at(base_, u.path));
+        lists[u.path][static_cast<std::size_t>(u.index)] = format_number(theta[static_cast<Eigen::Index>(j)]);
+      }
+      for (auto& [path, list] : lists) {
+        std::vector<std::string> entries;
+        for (const auto& item : list) entries.push_back(item.Scalar());
+        values[path].push_back("[" + join(entries) + "]");
+      }
+    }
+    for (const auto& [path, list] : values) {
+      YAML::Node seq(YAML::NodeType::Sequence);
+      for (const std::string& text : list) seq.push_back(YAML::Load(text));
+      vary[path] = seq;
+    }
+    if (!orders.empty()) {
+      YAML::Node seq(YAML::NodeType::Sequence);
+      for (int order : orders) seq.push_back(order);
+      vary["mesh.box.order"] = seq;
+    }
+    document["study"]["vary"] = vary;
+    document["study"]["mode"] = "zip";
+    document["study"]["outputs"] = std::vector<std::string>{"modal"};
+    fs::create_directories(folder);
+    YAML::Emitter out;
+    out << document;
+    const fs::path scene_path = folder / "forward.yaml";
+    io::write_file_atomic(scene_path, std::string(out.c_str()) + "\n");
+    study::StudyOptions study;
+    study.scene_path = scene_path.string();
+    study.output_dir = (folder / "runs").string();
+    study.executable = options_.executable;
+    study.jobs = options_.jobs;
+    study.modal_cache = false;  // every case has its own (moved) mesh
+    study.gnuplot = "";
+    std::ostringstream quiet;
+    const int code = study::run_study(study, progress ? log_ : quiet);
+    if (code == 130) throw SolverError("identify: interrupted");
+    std::vector<VectorX> result;
+    for (std::size_t c = 0; c < thetas.size(); ++c) {
+      const fs::path case_dir = folder / "runs" / study::case_folder(static_cast<int>(c));
+      const fs::path modal = case_dir / "modal.json";
+      if (!fs::exists(modal)) {
+        std::string error = "no modal.json";
+        try {
+          std::ifstream record(case_dir / "case.json");
+          const json value = json::parse(record);
+          if (value.contains("error")) error = value["error"].get<std::string>();
+        } catch (const std::exception&) {
+        }
+        throw SolverError("identify: forward run " + case_dir.string() + " failed: " + error);
+      }
+      std::ifstream stream(modal);
+      const json document_json = json::parse(stream);
+      VectorX m(static_cast<Eigen::Index>(spec_.measured.size()));
+      for (std::size_t i = 0; i < spec_.measured.size(); ++i) {
+        const Measurement& measurement = spec_.measured[i];
+        double value = kNaN;
+        const json& pairs = document_json["pairs"];
+        if (static_cast<std::size_t>(measurement.mode) <= pairs.size()) {
+          const json& pair = pairs[static_cast<std::size_t>(measurement.mode - 1)];
+          const bool paired = pair.value("paired", true);
+          if (measurement.quantity == "f_uncracked") value = pair["f_uncracked_hz"].get<double>();
+          if (measurement.quantity == "f_open" && paired) value = pair["f_open_hz"].get<double>();
+          if (measurement.quantity == "f_bilinear" && paired) value = pair["f_bilinear_hz"].get<double>();
+        }
+        m[static_cast<Eigen::Index>(i)] = value;
+      }
+      result.push_back(m);
+    }
+    runs_ += static_cast<int>(thetas.size());
+    return result;
+  }
+
+  int runs() const { return runs_; }
+
+ private:
+  const IdentifySpec& spec_;
+  YAML::Node base_;
+  const IdentifyOptions& options_;
+  std::ostream& log_;
+  int runs_ = 0;
+};
+
+struct Fitted {
+  VectorX theta;
+  double chi2 = 0.0;
+  VectorX residuals;
+  VectorX model;
+  fit::Uncertainty uncertainty;
+  std::vector<bool> at_bound;
+  bool converged = false;
+};
+
+json vector_json(const VectorX& v) {
+  json out = json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) out.push_back(std::isfinite(v[i]) ? json(v[i]) : json(nullptr));
+  return out;
+}
+
+json matrix_json(const MatrixX& m) {
+  json out = json::array();
+  for (Eigen::Index r = 0; r < m.rows(); ++r) out.push_back(vector_json(m.row(r).transpose()));
+  return out;
+}
+
+json keyed(const IdentifySpec& spec, const VectorX& v) {
+  json out = json::object();
+  for (std::size_t j = 0; j < spec.unknowns.size(); ++j) out[spec.unknowns[j].key] = v[static_cast<Eigen::Index>(j)];
+  return out;
+}
+
+json intervals_json(const IdentifySpec& spec, const fit::Uncertainty& u) {
+  json out = json::object();
+  for (std::size_t j = 0; j < spec.unknowns.size(); ++j) {
+    const auto& interval = u.interval_95[j];
+    out[spec.unknowns[j].key] = {std::isfinite(interval[0]) ? json(interval[0]) : json(nullptr),
+                                 std::isfinite(interval[1]) ? json(interval[1]) : json(nullptr)};
+  }
+  return out;
+}
+
+std::string measurement_label(const Measurement& m) {
+  return m.quantity + (m.mode > 0 ? " mode " + std::to_string(m.mode) : "") +
+         (m.probe.empty() ? "" : " " + m.probe + " @ " + format_number(m.drive_hz) + " Hz");
+}
+
+/// identify_map.png: chi^2 over the first two unknowns (or one), the minima, the estimate and its
+/// 95 % joint region (the Gauss-Newton ellipse). Never throws: returns a note on failure.
+std::string plot_map(const fs::path& dir, const IdentifySpec& spec, const std::vector<std::vector<double>>& axes,
+                     const std::vector<double>& chi2, const std::vector<Fitted>& minima, const Fitted& best) {
+  spectral::PlotOptions probe;
+  if (!spectral::gnuplot_available(probe)) return "gnuplot not found: no plots";
+  std::ostringstream data, marks, region, script;
+  const std::size_t k = axes.size();
+  const std::size_t n1 = k > 1 ? axes[1].size() : 1;
+  for (std::size_t flat = 0; flat < chi2.size(); ++flat) {
+    const std::size_t i0 = k > 1 ? (flat / n1) % axes[0].size() : flat;
+    if (k > 2 && (flat / (n1 * axes[1].size())) != 0) continue;  // a slice of higher dimensions
+    data << axes[0][i0] << " " << (k > 1 ? axes[1][flat % n1] : 0.0) << " " << std::log10(chi2[flat] + 1e-300) << "\n";
+    if (k > 1 && flat % n1 == n1 - 1) data << "\n";
+  }
+  for (const Fitted& m : minima) marks << m.theta[0] << " " << (k > 1 ? m.theta[1] : m.chi2) << "\n";
+  if (k > 1 && best.uncertainty.covariance.allFinite()) {
+    const Eigen::LLT<Eigen::Matrix2d> llt(best.uncertainty.covariance.topLeftCorner(2, 2));
+    if (llt.info() == Eigen::Success) {
+      const Eigen::Matrix2d l = llt.matrixL();
+      for (int t = 0; t <= 100; ++t) {
+        const double angle = 2.0 * M_PI * t / 100.0;
+        const Eigen::Vector2d p = best.theta.head(2) + std::sqrt(kChi2Two95) * l * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+        region << p[0] << " " << p[1] << "\n";
+      }
+    }
+  }
+  io::write_file_atomic(dir / "identify_map.dat", "# " + spec.unknowns[0].key + (k > 1 ? " " + spec.unknowns[1].key : "") +
+                                                      " log10(chi2)\n" + data.str());
+  io::write_file_atomic(dir / "identify_minima.dat", marks.str());
+  io::write_file_atomic(dir / "identify_region.dat", region.str());
+  script << "set terminal pngcairo size 900,700\nset output 'identify_map.png'\n";
+  script << "set xlabel " << spectral::gnuplot_quote(spec.unknowns[0].key) << "\n"
+         << "set xrange [" << spec.unknowns[0].lower << ":" << spec.unknowns[0].upper << "]\n";
+  if (k > 1) script << "set yrange [" << spec.unknowns[1].lower << ":" << spec.unknowns[1].upper << "]\n";
+  if (k > 1) {
+    script << "set ylabel " << spectral::gnuplot_quote(spec.unknowns[1].key) << "\n"
+           << "set title 'misfit log10(chi^2), the minima (circles) and the 95 % region of the estimate'\n"
+           << "set view map\nset pm3d map interpolate 4,4\nset palette rgb 33,13,10\n"
+           << "splot 'identify_map.dat' using 1:2:3 with pm3d notitle, "
+           << "'identify_minima.dat' using 1:2:(0) with points pt 7 ps 1.5 lc rgb 'white' title 'minima', "
+           << "'identify_region.dat' using 1:2:(0) with lines lw 2 lc rgb 'white' title '95 %'\n";
+  } else {
+    script << "set ylabel 'log10(chi^2)'\nplot 'identify_map.dat' using 1:3 with linespoints title 'map', "
+           << "'identify_minima.dat' using 1:(log10($2)) with points pt 7 ps 1.5 title 'minima'\n";
+  }
+  io::write_file_atomic(dir / "identify_map.gp", script.str());
+  const std::string command = "cd " + spectral::shell_quote(dir.string()) + " && gnuplot identify_map.gp > /dev/null 2>&1";
+  if (std::system(command.c_str()) != 0) return "gnuplot failed on identify_map.gp";
+  return "";
+}
+
+std::string plot_fit(const fs::path& dir, const IdentifySpec& spec, const Fitted& best, const VectorX& weights) {
+  spectral::PlotOptions probe;
+  if (!spectral::gnuplot_available(probe)) return "gnuplot not found: no plots";
+  std::ostringstream data;
+  data << "# index measured sigma model weight(sqrt(sigma^2+eps^2)) label\n";
+  for (std::size_t i = 0; i < spec.measured.size(); ++i) {
+    const Measurement& m = spec.measured[i];
+    data << i + 1 << " " << m.value << " " << m.sigma << " " << best.model[static_cast<Eigen::Index>(i)] << " "
+         << weights[static_cast<Eigen::Index>(i)] << " \"" << measurement_label(m) << "\"\n";
+  }
+  io::write_file_atomic(dir / "identify_fit.dat", data.str());
+  std::ostringstream script;
+  script << "set terminal pngcairo size 900,600\nset output 'identify_fit.png'\n"
+         << "set title 'measured (sigma bars) against fitted (model-error bars), normalised by the measured value'\n"
+         << "set ylabel 'value / measured [-]'\nset xtics rotate by -30\nset offsets 0.5,0.5,0,0\n"
+         << "plot 'identify_fit.dat' using 1:(1):($3/$2):xtic(6) with yerrorbars pt 7 title 'measured', "
+         << "'' using ($1+0.1):($4/$2):($5/$2) with yerrorbars pt 5 title 'fitted'\n";
+  io::write_file_atomic(dir / "identify_fit.gp", script.str());
+  const std::string command = "cd " + spectral::shell_quote(dir.string()) + " && gnuplot identify_fit.gp > /dev/null 2>&1";
+  if (std::system(command.c_str()) != 0) return "gnuplot failed on identify_fit.gp";
+  return "";
+}
+
+}  // namespace
+
+const std::vector<std::string>& frequency_quantities() {
+  static const std::vector<std::string> names = {"f_uncracked", "f_open", "f_bilinear"};
+  return names;
+}
+
+const std::vector<std::string>& all_quantities() {
+  static const std::vector<std::string> names = {"f_uncracked", "f_open", "f_bilinear", "damping_ratio",
+                                                 "A1",          "A2/A1",  "A3/A1",      "A1/2/A1"};
+  return names;
+}
+
+std::vector<Measurement> read_measurements_csv(const std::string& path) {
+  std::ifstream file(path);
+  if (!file) throw InputError(path + ": expected a readable measurements file (CSV), got " + std::strerror(errno));
+  const std::vector<std::string> header = {"quantity", "mode", "probe", "drive_hz", "value", "sigma"};
+  std::string line;
+  int number = 0;
+  std::vector<Measurement> measured;
+  bool have_header = false;
+  while (std::getline(file, line)) {
+    ++number;
+    if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
+    const std::vector<std::string> cells = split_csv(line);
+    if (!have_header) {
+      if (cells != header) {
+        throw InputError(path + ":" + std::to_string(number) + ": expected the header " + join(header, ",") +
+                         ", got '" + line + "'");
+      }
+      have_header = true;
+      continue;
+    }
+    const std::string where = path + ":" + std::to_string(number);
+    if (cells.size() != header.size()) {
+      throw InputError(where + ": expected " + std::to_string(header.size()) + " columns (" + join(header, ",") +
+                       "), got " + std::to_string(cells.size()));
+    }
+    auto number_cell = [&](std::size_t c, bool integer) {
+      double value = kNaN;
+      if (!scene::parse_number(cells[c], value) || !std::isfinite(value) || (integer && value != std::floor(value))) {
+        throw InputError(where + ": column " + header[c] + ": expected " + (integer ? "an integer" : "a finite number") +
+                         ", got '" + cells[c] + "'");
+      }
+      return value;
+    };
+    Measurement m;
+    m.where = where;
+    m.quantity = cells[0];
+    if (!cells[1].empty()) m.mode = static_cast<int>(number_cell(1, true));
+    m.probe = cells[2];
+    if (!cells[3].empty()) m.drive_hz = number_cell(3, false);
+    if (cells[4].empty()) throw InputError(where + ": column value: expected the measured value, got an empty cell");
+    m.value = number_cell(4, false);
+    if (cells[5].empty()) throw InputError(where + ": column sigma: expected a standard deviation > 0, got an empty cell");
+    m.sigma = number_cell(5, false);
+    try {
+      check_measurement(m, path, number, "row");
+    } catch (const InputError& error) {
+      throw InputError(std::string(error.what()));
+    }
+    measured.push_back(m);
+  }
+  if (!have_header) throw InputError(path + ": expected the header " + join(header, ",") + ", got an empty file");
+  if (measured.empty()) throw InputError(path + ": expected at least one measurement row, got none");
+  return measured;
+}
+
+IdentifySpec parse_identify_section(const std::string& text, const std::string& file) {
+  IdentifySpec spec;
+  const YAML::Node document = scene::parse_yaml(text, file);
+  if (!document.IsMap() || !document["identify"]) {
+    fail(file, -1, "identify", "a section identify: {unknowns: {key.path: [low, high]}, measured: [...]}", "nothing");
+  }
+  YAML::Node section;
+  for (const auto& entry : document)
+    if (entry.first.Scalar() == "identify") {
+      section = entry.second;
+      spec.line = scene::mark_line(entry.first);
+    }
+  if (!section.IsMap()) fail(file, spec.line, "identify", "a map with keys unknowns, measured, map, sigma", scene::describe_node(section));
+  const std::vector<std::string> keys = {"unknowns", "measured", "map", "sigma"};
+  for (const auto& entry : section) {
+    const std::string key = entry.first.Scalar();
+    if (std::find(keys.begin(), keys.end(), key) == keys.end())
+      fail(file, scene::mark_line(entry.first), "identify." + key, "one of " + join(keys),
+           "unknown key '" + key + "'" + scene::suggestion(key, keys));
+  }
+  // unknowns
+  const YAML::Node unknowns = section["unknowns"];
+  if (!unknowns || !unknowns.IsMap() || unknowns.size() == 0)
+    fail(file, spec.line, "identify.unknowns", "a map of scene key paths to [low, high] bounds",
+         unknowns ? scene::describe_node(unknowns) : "nothing");
+  for (const auto& entry : unknowns) {
+    Unknown u;
+    u.key = entry.first.Scalar();
+    u.line = scene::mark_line(entry.first);
+    const std::string where_path = "identify.unknowns." + u.key;
+    u.path = u.key;
+    const auto bracket = u.key.find('[');
+    if (bracket != std::string::npos && u.key.back() == ']') {
+      u.path = u.key.substr(0, bracket);
+      double index = kNaN;
+      if (!scene::parse_number(u.key.substr(bracket + 1, u.key.size() - bracket - 2), index) || index < 0 ||
+          index != std::floor(index))
+        fail(file, u.line, where_path, "a key path with a list index as [0]", "'" + u.key + "'");
+      u.index = static_cast<int>(index);
+    }
+    if (const std::string problem = study::check_key_path(u.path); !problem.empty())
+      throw InputError(file + ":" + std::to_string(u.line) + ": " + where_path + ": " + problem);
+    if (study::key_unit(u.path).empty())
+      fail(file, u.line, where_path, "a numeric scene key", "'" + u.path + "' (not a number)");
+    const YAML::Node bounds = entry.second;
+    if (!bounds.IsSequence() || bounds.size() != 2)
+      fail(file, u.line, where_path, "bounds [low, high]", scene::describe_node(bounds));
+    u.lower = number_of(bounds[0], file, where_path + "[0]");
+    u.upper = number_of(bounds[1], file, where_path + "[1]");
+    if (!(u.upper > u.lower)) fail(file, u.line, where_path, "bounds [low, high] with low < high", format_number(u.lower) + ", " + format_number(u.upper));
+    for (const Unknown& other : spec.unknowns)
+      if (other.key == u.key) fail(file, u.line, where_path, "each unknown once", "'" + u.key + "' again");
+    spec.unknowns.push_back(u);
+  }
+  // measured
+  const YAML::Node measured = section["measured"];
+  if (!measured) fail(file, spec.line, "identify.measured", "a list of measurements or the path of a CSV file", "nothing");
+  if (measured.IsScalar()) {
+    fs::path csv(measured.Scalar());
+    if (csv.is_relative()) csv = fs::path(file).parent_path() / csv;
+    spec.measured = read_measurements_csv(csv.string());
+  } else if (measured.IsSequence() && measured.size() > 0) {
+    for (std::size_t i = 0; i < measured.size(); ++i)
+      spec.measured.push_back(measurement_from(measured[i], file, "identify.measured[" + std::to_string(i) + "]"));
+  } else {
+    fail(file, scene::mark_line(measured), "identify.measured", "a list of measurements or the path of a CSV file",
+         scene::describe_node(measured));
+  }
+  // map, sigma
+  if (const YAML::Node map = section["map"]) {
+    if (!map.IsMap()) fail(file, scene::mark_line(map), "identify.map", "a map {points}", scene::describe_node(map));
+    for (const auto& entry : map)
+      if (entry.first.Scalar() != "points")
+        fail(file, scene::mark_line(entry.first), "identify.map." + entry.first.Scalar(), "one of points",
+             "unknown key '" + entry.first.Scalar() + "'");
+    if (map["points"]) {
+      const double points = number_of(map["points"], file, "identify.map.points", true);
+      if (points < 3 || points > 41) fail(file, scene::mark_line(map["points"]), "identify.map.points", "an integer in 3..41", format_number(points));
+      spec.map_points = static_cast<int>(points);
+    }
+  }
+  if (const YAML::Node sigma = section["sigma"]) {
+    const std::string word = sigma.Scalar();
+    if (word != "scaled" && word != "trusted")
+      fail(file, scene::mark_line(sigma), "identify.sigma", "one of scaled, trusted", "'" + word + "'");
+    spec.scale_by_fit = word == "scaled";
+  }
+  return spec;
+}
+
+json run_identify(const IdentifyOptions& options, std::ostream& log) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::string& file = options.scene_path;
+  const std::string text = scene::read_scene_file(file);
+  IdentifySpec spec = parse_identify_section(text, file);
+  const scene::Scene scene = scene::parse_scene(text, file);
+  const std::size_t k = spec.unknowns.size(), n = spec.measured.size();
+
+  // ---- checks against the scene
+  if (!scene.crack || !scene.gmsh_file.empty())
+    throw InputError(file + ": identify: expected a box mesh with a crack (crack.plane and crack.region), got " +
+                     (scene.gmsh_file.empty() ? "no crack" : "a Gmsh mesh (its crack cannot be moved)"));
+  for (const Measurement& m : spec.measured) {
+    if (std::find(frequency_quantities().begin(), frequency_quantities().end(), m.quantity) ==
+        frequency_quantities().end()) {
+      if (!is_frequency(m.quantity)) {
+        bool found = false;
+        if (scene.transient)
+          for (const auto& probe : scene.transient->probes) found = found || probe.name == m.probe;
+        if (!found) throw InputError(m.where + ": probe: expected a probe of the scene's transient.probes, got '" + m.probe + "'");
+      }
+      throw InputError(m.where + ": quantity: expected one of " + join(frequency_quantities()) +
+                       " (identify computes modal frequencies only so far), got '" + m.quantity + "'");
+    }
+    if (m.mode > scene.modal.modes)
+      throw InputError(m.where + ": mode: expected a mode the scene solves (modal.modes = " +
+                       std::to_string(scene.modal.modes) + "), got " + std::to_string(m.mode));
+  }
+  YAML::Node base = scene::parse_yaml(text, file);
+  base.remove("identify");
+  base.remove("study");
+  for (const Unknown& u : spec.unknowns) {
+    const YAML::Node value = node_at(base, u.path);
+    if (u.index >= 0 && (!value.IsSequence() || static_cast<int>(value.size()) <= u.index))
+      throw InputError(file + ":" + std::to_string(u.line) + ": identify.unknowns." + u.key +
+                       ": expected an entry of a list the scene gives at " + u.path + ", got " +
+                       (value.IsDefined() ? scene::describe_node(value) : "nothing"));
+    if (u.index < 0 && value.IsSequence())
+      throw InputError(file + ":" + std::to_string(u.line) + ": identify.unknowns." + u.key + ": expected one entry (" +
+                       u.path + "[0]), got the whole list");
+  }
+
+  // ---- the reference crack: the middle of the bounds (its plane on the nearest uniform grid plane)
+  mesh::CrackSpec reference = *scene.crack;
+  for (const Unknown& u : spec.unknowns) {
+    const double middle = 0.5 * (u.lower + u.upper);
+    if (u.path == "crack.plane.at") {
+      const int axis = reference.normal;
+      const int cells = scene.box.cells[axis];
+      const int line = std::clamp(uniform_index(middle, scene.box.origin[axis], scene.box.size[axis], cells), 1, cells - 1);
+      reference.at = scene.box.origin[axis] + scene.box.size[axis] * line / cells;
+    }
+    for (int axis = 0; axis < 3; ++axis)
+      if (u.path == std::string("crack.region.") + "xyz"[axis] && u.index >= 0 && u.index < 2)
+        reference.region[axis][static_cast<std::size_t>(u.index)] = middle;
+  }
+  YAML::Node ref(YAML::NodeType::Map);
+  ref["at"] = format_number(reference.at);
+  for (int axis = 0; axis < 3; ++axis) {
+    if (axis == reference.normal) continue;
+    YAML::Node range(YAML::NodeType::Sequence);
+    range.push_back(format_number(reference.region[axis][0]));
+    range.push_back(format_number(reference.region[axis][1]));
+    range.SetStyle(YAML::EmitterStyle::Flow);
+    ref["region"][std::string(1, "xyz"[axis])] = range;
+  }
+  base["crack"]["reference"] = ref;
+
+  const fs::path dir(options.output_dir);
+  if (fs::exists(dir / "identify.json") && !options.overwrite) {
+    // A rerun into the same folder resumes: the forward runs are cached by their scenes.
+  }
+  fs::create_directories(dir);
+  Forward forward(spec, base, options, log);
+  fit::Bounds bounds{VectorX(k), VectorX(k)};
+  for (std::size_t j = 0; j < k; ++j) {
+    bounds.lower[static_cast<Eigen::Index>(j)] = spec.unknowns[j].lower;
+    bounds.upper[static_cast<Eigen::Index>(j)] = spec.unknowns[j].upper;
+  }
+
+  // ---- 1. the map
+  std::vector<std::vector<double>> axes(k);
+  std::size_t total = 1;
+  for (std::size_t j = 0; j < k; ++j) {
+    for (int i = 0; i < spec.map_points; ++i)
+      axes[j].push_back(spec.unknowns[j].lower + (spec.unknowns[j].upper - spec.unknowns[j].lower) * i / (spec.map_points - 1));
+    total *= axes[j].size();
+  }
+  std::vector<VectorX> grid;
+  for (std::size_t flat = 0; flat < total; ++flat) {
+    VectorX theta(static_cast<Eigen::Index>(k));
+    std::size_t rest = flat;
+    for (std::size_t j = k; j-- > 0;) {
+      theta[static_cast<Eigen::Index>(j)] = axes[j][rest % axes[j].size()];
+      rest /= axes[j].size();
+    }
+    grid.push_back(theta);
+  }
+  log << "identify: map of " << total << " forward runs (" << spec.map_points << " per unknown)\n";
+  const fs::path map_dir = options.map_cache.empty() ? dir / "map" : fs::path(options.map_cache);
+  const std::vector<VectorX> map_models = forward.models(grid, map_dir, true);
+  const int map_runs = forward.runs();
+
+  VectorX values(static_cast<Eigen::Index>(n)), sigma(static_cast<Eigen::Index>(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    values[static_cast<Eigen::Index>(i)] = spec.measured[i].value;
+    sigma[static_cast<Eigen::Index>(i)] = spec.measured[i].sigma;
+  }
+  auto chi2_of = [&](const VectorX& model, const VectorX& weights) {
+    const VectorX r = (model - values).cwiseQuotient(weights);
+    return r.allFinite() ? r.squaredNorm() : std::numeric_limits<double>::infinity();
+  };
+  std::vector<double> map_chi2;
+  for (const VectorX& m : map_models) map_chi2.push_back(chi2_of(m, sigma));
+  std::vector<std::size_t> minima = fit::grid_minima(axes, map_chi2);
+  if (minima.empty()) throw SolverError("identify: no finite misfit on the map (no mode paired anywhere)");
+
+  // ---- 2. the model error at the middle of the bounds (the reference crack; independent of the
+  // measurements, so a cached map keeps it too): orders p, p+1, p+2 (Richardson)
+  const VectorX best_grid = 0.5 * (bounds.lower + bounds.upper);
+  const int p = scene.box.order;
+  const int first = std::min(p, 2);
+  const std::vector<int> levels = {first, first + 1, first + 2};
+  log << "identify: model error from the orders " << levels[0] << ", " << levels[1] << ", " << levels[2]
+      << " in the middle of the bounds\n";
+  const std::vector<VectorX> level_models =
+      forward.models({best_grid, best_grid, best_grid}, map_dir / "accuracy", false, levels);
+  VectorX model_error(static_cast<Eigen::Index>(n));
+  std::vector<bool> error_verified(n, true);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Index ii = static_cast<Eigen::Index>(i);
+    const double q0 = level_models[0][ii], q1 = level_models[1][ii], q2 = level_models[2][ii];
+    const double qp = level_models[static_cast<std::size_t>(p - first)][ii];
+    const double r = (q0 - q1) / (q1 - q2);
+    double error;
+    if (std::isfinite(r) && r > 1.0) {
+      const double extrapolated = q2 + (q2 - q1) / (r - 1.0);
+      error = 1.25 * std::abs(extrapolated - qp);
+    } else {
+      error = 3.0 * std::max(std::abs(q0 - q1), std::abs(q1 - q2));
+      error_verified[i] = false;
+    }
+    // Relative to the value, carried to every parameter vector.
+    model_error[ii] = std::isfinite(error) ? error / std::abs(qp) : 0.0;
+  }
+  auto weights_at = [&](const VectorX& model) {
+    VectorX w(static_cast<Eigen::Index>(n));
+    for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(n); ++i) {
+      const double eps = model_error[i] * std::abs(std::isfinite(model[i]) ? model[i] : values[i]);
+      w[i] = std::sqrt(sigma[i] * sigma[i] + eps * eps);
+    }
+    return w;
+  };
+  // Weights from the measured values (fixed during the fit: the estimate's relative error times them).
+  const VectorX weights = weights_at(values);
+  map_chi2.clear();
+  for (const VectorX& m : map_models) map_chi2.push_back(chi2_of(m, weights));
+  minima = fit::grid_minima(axes, map_chi2);
+  const double best_map = map_chi2[minima.front()];
+  std::vector<std::size_t> starts;
+  for (std::size_t index : minima)
+    if (map_chi2[index] <= best_map + kMinimaSpread && starts.size() < kMaxStarts) starts.push_back(index);
+
+  // ---- 3. local fits: on the map's interpolant, then on the forward model
+  const fit::TensorSpline spline(axes, map_models);
+  const fit::BatchResiduals on_spline = [&](const std::vector<VectorX>& thetas) {
+    std::vector<VectorX> out;
+    for (const VectorX& theta : thetas) out.push_back((spline(theta) - values).cwiseQuotient(weights));
+    return out;
+  };
+  int batch = 0;
+  const fit::BatchResiduals on_model = [&](const std::vector<VectorX>& thetas) {
+    char name[16];
+    std::snprintf(name, sizeof name, "%04d", batch++);
+    std::vector<VectorX> out;
+    for (const VectorX& m : forward.models(thetas, dir / "fit" / name, false)) out.push_back((m - values).cwiseQuotient(weights));
+    return out;
+  };
+  std::vector<Fitted> fitted;
+  for (std::size_t s = 0; s < starts.size(); ++s) {
+    fit::FitOptions smooth;
+    smooth.steps = VectorX::Constant(static_cast<Eigen::Index>(k), 1e-6);
+    const fit::FitResult coarse = fit::fit_bounded(on_spline, grid[starts[s]], bounds, smooth);
+    fit::FitOptions exact;
+    exact.steps = VectorX::Constant(static_cast<Eigen::Index>(k), kForwardStep);
+    exact.max_iterations = 8;
+    exact.function_tolerance = 1e-8;
+    exact.parameter_tolerance = 1e-7;
+    log << "identify: local fit " << s + 1 << "/" << starts.size() << " from the map minimum chi2 = "
+        << format_number(map_chi2[starts[s]]) << "\n";
+    const fit::FitResult result = fit::fit_bounded(on_model, coarse.theta, bounds, exact);
+    Fitted f;
+    f.theta = result.theta;
+    f.chi2 = result.chi2;
+    f.residuals = result.residuals;
+    f.model = result.residuals.cwiseProduct(weights) + values;
+    f.at_bound = result.at_bound;
+    f.converged = result.converged;
+    f.uncertainty = fit::uncertainty(result.jacobian, result.theta, result.chi2, spec.scale_by_fit);
+    fitted.push_back(f);
+  }
+  std::sort(fitted.begin(), fitted.end(), [](const Fitted& a, const Fitted& b) { return a.chi2 < b.chi2; });
+  // Starts that converged to the same point are one minimum.
+  std::vector<Fitted> distinct;
+  for (const Fitted& f : fitted) {
+    bool same = false;
+    for (const Fitted& d : distinct)
+      same = same || ((f.theta - d.theta).cwiseQuotient(bounds.upper - bounds.lower).cwiseAbs().maxCoeff() < 1e-3);
+    if (!same) distinct.push_back(f);
+  }
+  const Fitted& best = distinct.front();
+
+  // ---- 4. flags
+  std::vector<std::string> reasons;
+  if (n < k) reasons.push_back(std::to_string(n) + " measurements for " + std::to_string(k) + " unknowns");
+  if (best.uncertainty.rank_deficient)
+    reasons.push_back("the Jacobian has rank " + std::to_string(best.uncertainty.rank) + " < " + std::to_string(k) +
+                      ": some combination of the unknowns does not change the measured quantities");
+  for (std::size_t j = 0; j < k; ++j)
+    if (best.at_bound[j]) reasons.push_back(spec.unknowns[j].key + " is at a bound: its interval is not reliable");
+  for (std::size_t d = 1; d < distinct.size(); ++d)
+    if (distinct[d].chi2 - best.chi2 < kEqualFit)
+      reasons.push_back("several minima fit equally well (chi2 " + format_number(best.chi2) + " and " +
+                        format_number(distinct[d].chi2) + "): see minima");
+  for (std::size_t i = 0; i < n; ++i)
+    if (!error_verified[i])
+      reasons.push_back("the model error of " + measurement_label(spec.measured[i]) +
+                        " is not verified (the orders do not converge monotonically): 3x the change is used");
+
+  // ---- outputs
+  json document;
+  document["estimate"] = keyed(spec, best.theta);
+  document["interval_95"] = intervals_json(spec, best.uncertainty);
+  document["sd"] = keyed(spec, best.uncertainty.sd);
+  document["covariance"] = matrix_json(best.uncertainty.covariance);
+  document["correlation"] = matrix_json(best.uncertainty.correlation);
+  document["unknowns"] = json::array();
+  for (const Unknown& u : spec.unknowns) document["unknowns"].push_back({{"key", u.key}, {"bounds", {u.lower, u.upper}}});
+  document["minima"] = json::array();
+  for (const Fitted& f : distinct) {
+    json at_bound = json::object();
+    for (std::size_t j = 0; j < k; ++j) at_bound[spec.unknowns[j].key] = static_cast<bool>(f.at_bound[j]);
+    document["minima"].push_back({{"estimate", keyed(spec, f.theta)}, {"misfit", f.chi2},
+                                  {"interval_95", intervals_json(spec, f.uncertainty)}, {"at_bound", at_bound},
+                                  {"converged", f.converged}});
+  }
+  const bool identifiable = reasons.empty() || (reasons.size() == 1 && reasons[0].find("not verified") != std::string::npos);
+  document["identifiable"] = identifiable && n >= k && !best.uncertainty.rank_deficient;
+  document["reasons"] = reasons;
+  document["residuals"] = json::array();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Measurement& m = spec.measured[i];
+    const Eigen::Index ii = static_cast<Eigen::Index>(i);
+    json row = {{"quantity", m.quantity}, {"value", m.value}, {"sigma", m.sigma},
+                {"model", std::isfinite(best.model[ii]) ? json(best.model[ii]) : json(nullptr)},
+                {"model_error", model_error[ii] * std::abs(values[ii])},
+                {"model_error_verified", static_cast<bool>(error_verified[i])},
+                {"normalised", best.residuals[ii]}};
+    if (m.mode > 0) row["mode"] = m.mode;
+    if (!m.probe.empty()) row["probe"] = m.probe;
+    if (m.drive_hz > 0) row["drive_hz"] = m.drive_hz;
+    document["residuals"].push_back(row);
+  }
+  document["chi2"] = best.chi2;
+  document["dof"] = static_cast<int>(n) - static_cast<int>(k);
+  document["sigma"] = spec.scale_by_fit ? "scaled" : "trusted";
+  document["t_quantile"] = best.uncertainty.t;
+  document["reference_crack"] = {{"at", reference.at}};
+  document["map"] = {{"points_per_unknown", spec.map_points}, {"runs", map_runs}, {"folder", map_dir.string()},
+                     {"best_chi2", best_map}, {"minima_kept", starts.size()}};
+  document["forward_runs"] = forward.runs();
+  document["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  // identify_map.csv: the map as a table (unknowns, chi^2 with the final weights).
+  std::ostringstream csv;
+  for (std::size_t j = 0; j < k; ++j) csv << study::key_header(spec.unknowns[j].path) + (spec.unknowns[j].index >= 0 ? "[" + std::to_string(spec.unknowns[j].index) + "]" : "") << ",";
+  csv << "chi2 [-]\n";
+  for (std::size_t flat = 0; flat < total; ++flat) {
+    for (std::size_t j = 0; j < k; ++j) csv << format_number(grid[flat][static_cast<Eigen::Index>(j)]) << ",";
+    csv << (std::isfinite(map_chi2[flat]) ? format_number(map_chi2[flat]) : "") << "\n";
+  }
+  io::write_file_atomic(dir / "identify_map.csv", csv.str());
+  std::vector<std::string> notes;
+  if (std::string note = plot_map(dir, spec, axes, map_chi2, distinct, best); !note.empty()) notes.push_back(note);
+  if (std::string note = plot_fit(dir, spec, best, weights); !note.empty()) notes.push_back(note);
+  document["notes"] = notes;
+  io::write_json(dir / "identify.json", document);
+
+  for (std::size_t j = 0; j < k; ++j) {
+    const auto& interval = best.uncertainty.interval_95[j];
+    log << "  " << spec.unknowns[j].key << " = " << format_number(best.theta[static_cast<Eigen::Index>(j)])
+        << "  95 %: [" << format_number(interval[0]) << ", " << format_number(interval[1]) << "]\n";
+  }
+  log << "  chi2 = " << format_number(best.chi2) << " (" << n << " measurements, " << k << " unknowns), "
+      << forward.runs() << " forward runs, " << (document["identifiable"].get<bool>() ? "identifiable" : "NOT identifiable")
+      << "\n";
+  for (const std::string& reason : reasons) log << "  note: " << reason << "\n";
+  return document;
+}
+
+}  // namespace crackle::identify

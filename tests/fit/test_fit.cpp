@@ -1,0 +1,177 @@
+// Bounded least squares, its covariance and intervals, Student's t, the tensor spline and the
+// minima of a grid: each against an exact answer.
+#include <gtest/gtest.h>
+
+#include <Eigen/LU>
+#include <Eigen/QR>
+
+#include <cmath>
+#include <random>
+
+#include "fit/fit.hpp"
+
+namespace crackle::fit {
+namespace {
+
+/// y = a exp(-b x) sampled at 8 points: a smooth two-parameter model.
+struct Exponential {
+  std::vector<double> x{0.0, 0.3, 0.6, 1.0, 1.5, 2.0, 2.5, 3.0};
+  std::vector<double> y;
+  double sigma = 1.0;
+  VectorX model(const VectorX& theta) const {
+    VectorX m(x.size());
+    for (std::size_t i = 0; i < x.size(); ++i) m[i] = theta[0] * std::exp(-theta[1] * x[i]);
+    return m;
+  }
+  BatchResiduals residuals(int* calls = nullptr) const {
+    return [this, calls](const std::vector<VectorX>& thetas) {
+      std::vector<VectorX> out;
+      for (const VectorX& theta : thetas) {
+        VectorX r = model(theta);
+        for (std::size_t i = 0; i < x.size(); ++i) r[i] = (r[i] - y[i]) / sigma;
+        out.push_back(r);
+        if (calls) ++*calls;
+      }
+      return out;
+    };
+  }
+};
+
+Bounds box(std::initializer_list<double> low, std::initializer_list<double> high) {
+  Bounds b{VectorX(low.size()), VectorX(high.size())};
+  int i = 0;
+  for (double v : low) b.lower[i++] = v;
+  i = 0;
+  for (double v : high) b.upper[i++] = v;
+  return b;
+}
+
+TEST(StudentT, QuantilesMatchTheTables) {
+  // Two-sided 95 % values of the standard tables.
+  EXPECT_NEAR(student_t_quantile(0.975, 1), 12.7062, 1e-4);
+  EXPECT_NEAR(student_t_quantile(0.975, 2), 4.3027, 1e-4);
+  EXPECT_NEAR(student_t_quantile(0.975, 5), 2.5706, 1e-4);
+  EXPECT_NEAR(student_t_quantile(0.975, 10), 2.2281, 1e-4);
+  EXPECT_NEAR(student_t_quantile(0.975, 30), 2.0423, 1e-4);
+  EXPECT_NEAR(student_t_quantile(0.975, 1000000), 1.95996, 1e-4);
+  EXPECT_NEAR(student_t_quantile(0.995, 4), 4.6041, 1e-4);
+  EXPECT_NEAR(student_t_quantile(0.025, 5), -2.5706, 1e-4);
+}
+
+TEST(FitBounded, RecoversExactParametersWithFewForwardRuns) {
+  Exponential problem;
+  const VectorX truth = (VectorX(2) << 2.0, 0.7).finished();
+  const VectorX m = problem.model(truth);
+  problem.y.assign(m.data(), m.data() + m.size());
+  int calls = 0;
+  FitOptions options;
+  options.steps = VectorX::Constant(2, 1e-6);
+  const FitResult result = fit_bounded(problem.residuals(&calls), (VectorX(2) << 1.0, 0.2).finished(),
+                                       box({0.1, 0.01}, {5.0, 3.0}), options);
+  EXPECT_TRUE(result.converged) << result.message;
+  EXPECT_NEAR(result.theta[0], 2.0, 1e-6);
+  EXPECT_NEAR(result.theta[1], 0.7, 1e-6);
+  EXPECT_LT(result.chi2, 1e-12);
+  EXPECT_EQ(result.evaluations, calls);
+  EXPECT_LT(calls, 100);
+  EXPECT_FALSE(result.at_bound[0] || result.at_bound[1]);
+}
+
+TEST(FitBounded, StopsAtAnActiveBoundAndSaysSo) {
+  Exponential problem;
+  const VectorX m = problem.model((VectorX(2) << 2.0, 0.7).finished());
+  problem.y.assign(m.data(), m.data() + m.size());
+  FitOptions options;
+  options.steps = VectorX::Constant(2, 1e-6);
+  // The decay rate may not exceed 0.5: the best fit sits on that bound.
+  const FitResult result = fit_bounded(problem.residuals(), (VectorX(2) << 1.0, 0.2).finished(),
+                                       box({0.1, 0.01}, {5.0, 0.5}), options);
+  EXPECT_NEAR(result.theta[1], 0.5, 1e-9);
+  EXPECT_TRUE(result.at_bound[1]);
+  EXPECT_FALSE(result.at_bound[0]);
+  // The Jacobian at the upper bound is one-sided from inside.
+  EXPECT_TRUE(result.jacobian.allFinite());
+}
+
+TEST(Uncertainty, LinearModelCovarianceIsExactAndIntervalsCoverAtTheNominalRate) {
+  // y = a + b x with sigma = 1: C = (X^T X)^-1 exactly, and over many noisy replicas the 95 %
+  // intervals (Student t, s^2 from the fit) cover the truth in about 95 % of them.
+  const std::vector<double> x{0.0, 1.0, 2.0, 3.0, 4.0, 5.0};
+  MatrixX design(6, 2);
+  for (int i = 0; i < 6; ++i) design.row(i) << 1.0, x[i];
+  const MatrixX exact = (design.transpose() * design).inverse();
+  const Uncertainty trusted = uncertainty(design, VectorX::Zero(2), 4.0, false);
+  EXPECT_NEAR((trusted.covariance - exact).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(trusted.correlation(0, 1), exact(0, 1) / std::sqrt(exact(0, 0) * exact(1, 1)), 1e-12);
+  const Uncertainty scaled = uncertainty(design, VectorX::Zero(2), 8.0, true);
+  EXPECT_NEAR(scaled.s2, 2.0, 1e-12);
+  EXPECT_NEAR(scaled.t, student_t_quantile(0.975, 4), 1e-12);
+
+  std::mt19937 generator(7);
+  std::normal_distribution<double> noise(0.0, 0.3);
+  int covered = 0;
+  const int replicas = 2000;
+  for (int rep = 0; rep < replicas; ++rep) {
+    VectorX y(6);
+    for (int i = 0; i < 6; ++i) y[i] = 1.0 + 0.5 * x[i] + noise(generator);
+    const VectorX theta = design.colPivHouseholderQr().solve(y);
+    const double chi2 = (design * theta - y).squaredNorm();
+    const Uncertainty u = uncertainty(design, theta, chi2, true);
+    if (u.interval_95[1][0] <= 0.5 && 0.5 <= u.interval_95[1][1]) ++covered;
+  }
+  EXPECT_NEAR(static_cast<double>(covered) / replicas, 0.95, 0.015);
+}
+
+TEST(Uncertainty, RankDeficientJacobianIsFlagged) {
+  MatrixX j(4, 2);
+  j << 1, 2, 2, 4, 3, 6, 4, 8;  // the second column is twice the first: only a + 2b is seen
+  const Uncertainty u = uncertainty(j, VectorX::Zero(2), 1.0, false);
+  EXPECT_TRUE(u.rank_deficient);
+  EXPECT_EQ(u.rank, 1);
+  EXPECT_FALSE(std::isfinite(u.sd[0]));
+}
+
+TEST(TensorSpline, ReproducesCubicsAlongOneAxisAndLinearFunctionsEverywhere) {
+  // A natural spline reproduces linear functions exactly; on a fine grid a smooth function to O(h^4).
+  std::vector<double> a{0.0, 0.5, 1.0, 1.5, 2.0}, b{-1.0, 0.0, 1.0, 2.0};
+  std::vector<VectorX> values, smooth;
+  for (double u : a)
+    for (double v : b) {
+      values.push_back((VectorX(2) << 1.0 + 2.0 * u - 3.0 * v, u - v).finished());
+      smooth.push_back((VectorX(1) << std::sin(u) * std::cos(0.5 * v)).finished());
+    }
+  const TensorSpline linear({a, b}, values);
+  const VectorX at = (VectorX(2) << 0.73, 1.31).finished();
+  EXPECT_NEAR(linear(at)[0], 1.0 + 2.0 * 0.73 - 3.0 * 1.31, 1e-12);
+  EXPECT_NEAR(linear(at)[1], 0.73 - 1.31, 1e-12);
+  // Grid values are hit exactly.
+  EXPECT_NEAR(TensorSpline({a, b}, smooth)((VectorX(2) << 1.5, 0.0).finished())[0], std::sin(1.5), 1e-12);
+  // Halving the spacing shrinks the interior error by about 16 (fourth order away from the ends).
+  auto error = [](int n) {
+    std::vector<double> axis;
+    for (int i = 0; i <= n; ++i) axis.push_back(-1.0 + 4.0 * i / n);
+    std::vector<VectorX> v;
+    for (double u : axis)
+      for (double w : axis) v.push_back((VectorX(1) << std::sin(u) * std::cos(0.5 * w)).finished());
+    const TensorSpline spline({axis, axis}, v);
+    return std::abs(spline((VectorX(2) << 1.05, 0.9).finished())[0] - std::sin(1.05) * std::cos(0.45));
+  };
+  const double ratio = error(16) / error(32);
+  EXPECT_GT(ratio, 8.0);
+}
+
+TEST(GridMinima, FindsEveryLocalMinimumLowestFirst) {
+  // Two wells of a symmetric function on a 9 x 5 grid: both reported, the deeper first.
+  std::vector<double> u, v{0, 1, 2, 3, 4};
+  for (int i = 0; i < 9; ++i) u.push_back(i);
+  std::vector<double> values;
+  for (double a : u)
+    for (double b : v) values.push_back(std::min(std::pow(a - 2, 2), std::pow(a - 6, 2) + 0.5) + std::pow(b - 2, 2));
+  const std::vector<std::size_t> minima = grid_minima({u, v}, values);
+  ASSERT_EQ(minima.size(), 2u);
+  EXPECT_EQ(minima[0], 2u * 5 + 2);
+  EXPECT_EQ(minima[1], 6u * 5 + 2);
+}
+
+}  // namespace
+}  // namespace crackle::fit
