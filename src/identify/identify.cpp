@@ -328,7 +328,7 @@ std::string plot_map(const fs::path& dir, const IdentifySpec& spec, const std::v
                                                       " log10(chi2)\n" + data.str());
   io::write_file_atomic(dir / "identify_minima.dat", marks.str());
   io::write_file_atomic(dir / "identify_region.dat", region.str());
-  script << "set terminal pngcairo size 900,700\nset output 'identify_map.png'\n";
+  script << "set terminal pngcairo size 900,700 noenhanced\nset output 'identify_map.png'\n";
   script << "set xlabel " << spectral::gnuplot_quote(spec.unknowns[0].key) << "\n"
          << "set xrange [" << spec.unknowns[0].lower << ":" << spec.unknowns[0].upper << "]\n";
   if (k > 1) script << "set yrange [" << spec.unknowns[1].lower << ":" << spec.unknowns[1].upper << "]\n";
@@ -361,7 +361,7 @@ std::string plot_fit(const fs::path& dir, const IdentifySpec& spec, const Fitted
   }
   io::write_file_atomic(dir / "identify_fit.dat", data.str());
   std::ostringstream script;
-  script << "set terminal pngcairo size 900,600\nset output 'identify_fit.png'\n"
+  script << "set terminal pngcairo size 900,600 noenhanced\nset output 'identify_fit.png'\n"
          << "set title 'measured (sigma bars) against fitted (model-error bars), normalised by the measured value'\n"
          << "set ylabel 'value / measured [-]'\nset xtics rotate by -30\nset offsets 0.5,0.5,0,0\n"
          << "plot 'identify_fit.dat' using 1:(1):($3/$2):xtic(6) with yerrorbars pt 7 title 'measured', "

@@ -1002,6 +1002,32 @@ const Param& study_parameters() {
   return table;
 }
 
+const Param& identify_parameters() {
+  static const Param table = map_of("", "", {map_of("identify", "Damage identification run by `crackle identify` (check, modal and run ignore it); parsed by src/identify, which accepts exactly these keys.", {
+      map_of("unknowns", "Scene keys to identify, each by its key path (a list entry by its index: `crack.region.z[0]`) "
+                         "with bounds [low, high]. A crack key moves the crack on a grid made for the middle of the "
+                         "bounds (crack.reference).", {}).required(),
+      list_of("measured", "The measurements, or the path of a CSV file (relative to the scene) with the header "
+                          "quantity,mode,probe,drive_hz,value,sigma and empty cells where a column does not apply.", {
+        choice("quantity", "What was measured: modal frequencies per uncracked mode (f_uncracked, f_open, f_bilinear; "
+                           "computed by identify now), or damping_ratio, A1, A2/A1, A3/A1, A1/2/A1 (accepted and "
+                           "checked, refused as not yet computed).",
+               {"f_uncracked", "f_open", "f_bilinear", "damping_ratio", "A1", "A2/A1", "A3/A1", "A1/2/A1"}).required(),
+        integer("mode", "Uncracked mode number (1 = lowest; open modes paired by MAC), for the frequencies.").at_least(1),
+        text("probe", "A probe of transient.probes, for the harmonic quantities."),
+        number("drive_hz", "Drive frequency of a harmonic quantity.").with_unit("Hz").above(0),
+        number("value", "The measured value (Hz for frequencies).").required(),
+        number("sigma", "Its standard deviation, same unit.").above(0).required(),
+      }).required(),
+      map_of("map", "The global map of the misfit.", {
+        integer("points", "Grid points per unknown.").at_least(3).defaults_to("7"),
+      }),
+      choice("sigma", "scaled: covariance s^2 (J^T J)^-1 with s^2 = chi^2/(n - k) and Student's t; trusted: s^2 = 1 and "
+                      "the normal quantile.", {"scaled", "trusted"}).defaults_to("scaled"),
+  }).optional_section()});
+  return table;
+}
+
 std::string scene_format_markdown() {
   return "# Scene format\n\n"
          "<!-- Generated from the parameter table in src/scene/scene.cpp by scene_format_markdown(); do not "
@@ -1019,7 +1045,11 @@ std::string scene_format_markdown() {
          "\n## Parameter study\n\n"
          "`crackle study scene.yaml -o DIR` runs one case per combination of the values below, each a full "
          "scene\n(validated like any other) in `DIR/cases/NNNN/`; `study.csv` and `study.json` collect them.\n\n" +
-         markdown_table(study_parameters());
+         markdown_table(study_parameters()) +
+         "\n## Identification\n\n"
+         "`crackle identify scene.yaml -o DIR` fits the unknowns below to the measured signatures "
+         "(README, \"Damage identification\").\n\n" +
+         markdown_table(identify_parameters());
 }
 
 }  // namespace crackle::scene

@@ -267,6 +267,8 @@ const Param& scene_parameters();
 /// not by load_scene): declared here so that docs/scene-format.md lists its keys and the plan
 /// takes its keys and choices from it.
 const Param& study_parameters();
+/// The `identify:` section (read by src/identify, not by load_scene), declared for docs/scene-format.md.
+const Param& identify_parameters();
 
 /// Markdown reference of every scene key, generated from the parameter table.
 std::string scene_format_markdown();

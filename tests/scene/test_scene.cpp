@@ -251,7 +251,7 @@ TEST(Scene, BadScenesGiveOneExactLine) {
       {kBody + "crack:\n  plane: {normal: x, at: 0.05}\n",
        "beam.yaml:7: crack.region: expected a map with keys x, y, z, got nothing"},
       {kBody + "crack:\n  plane: {normal: x, at: 0.05}\n  regoin: {y: [0, 0.02], z: [0.007, 0.01]}\n",
-       "beam.yaml:9: crack.regoin: expected one of plane, region, group, gap, contact, got unknown key 'regoin' "
+       "beam.yaml:9: crack.regoin: expected one of plane, region, reference, group, gap, contact, got unknown key 'regoin' "
        "(did you mean 'region'?)"},
       // the modal section
       {kBody + "modal: {modes: 0}\n", "beam.yaml:7: modal.modes: expected a positive integer, got 0"},
@@ -316,7 +316,7 @@ TEST(Scene, OverridesByKeyPath) {
             "0.055), "
             "got 0.052");
   EXPECT_EQ(error_of(kBeam, {{"crack.regoin.z", "[0, 0.01]"}}),
-            "beam.yaml: crack.regoin: expected one of plane, region, group, gap, contact, got unknown key 'regoin' "
+            "beam.yaml: crack.regoin: expected one of plane, region, reference, group, gap, contact, got unknown key 'regoin' "
             "(did you mean 'region'?)");
   EXPECT_EQ(error_of(kBeam, {{"boundary[3].face", "x+"}}),
             "beam.yaml: boundary: expected a list with an entry 3, got a list of 1 entry");
