@@ -162,7 +162,6 @@ class Forward {
     YAML::Node document = YAML::Clone(base_);
     YAML::Node vary(YAML::NodeType::Map);
     std::map<std::string, std::vector<std::string>> values;
-    std::vector<std::string> order_of_paths;
     for (const VectorX& theta : thetas) {
       std::map<std::string, YAML::Node> lists;
       for (std::size_t j = 0; j < spec_.unknowns.size(); ++j) {
@@ -428,11 +427,7 @@ std::vector<Measurement> read_measurements_csv(const std::string& path) {
     m.value = number_cell(4, false);
     if (cells[5].empty()) throw InputError(where + ": column sigma: expected a standard deviation > 0, got an empty cell");
     m.sigma = number_cell(5, false);
-    try {
-      check_measurement(m, path, number, "row");
-    } catch (const InputError& error) {
-      throw InputError(std::string(error.what()));
-    }
+    check_measurement(m, path, number, "row");
     measured.push_back(m);
   }
   if (!have_header) throw InputError(path + ": expected the header " + join(header, ",") + ", got an empty file");
@@ -598,10 +593,8 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
   }
   base["crack"]["reference"] = ref;
 
+  // A rerun into the same folder resumes: the forward runs are study cases, cached by their scenes.
   const fs::path dir(options.output_dir);
-  if (fs::exists(dir / "identify.json") && !options.overwrite) {
-    // A rerun into the same folder resumes: the forward runs are cached by their scenes.
-  }
   fs::create_directories(dir);
   Forward forward(spec, base, options, log);
   fit::Bounds bounds{VectorX(k), VectorX(k)};
@@ -754,9 +747,10 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
     if (distinct[d].chi2 - best.chi2 < kEqualFit)
       reasons.push_back("several minima fit equally well (chi2 " + format_number(best.chi2) + " and " +
                         format_number(distinct[d].chi2) + "): see minima");
+  std::vector<std::string> notes;
   for (std::size_t i = 0; i < n; ++i)
     if (!error_verified[i])
-      reasons.push_back("the model error of " + measurement_label(spec.measured[i]) +
+      notes.push_back("the model error of " + measurement_label(spec.measured[i]) +
                         " is not verified (the orders do not converge monotonically): 3x the change is used");
 
   // ---- outputs
@@ -776,8 +770,7 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
                                   {"interval_95", intervals_json(spec, f.uncertainty)}, {"at_bound", at_bound},
                                   {"converged", f.converged}});
   }
-  const bool identifiable = reasons.empty() || (reasons.size() == 1 && reasons[0].find("not verified") != std::string::npos);
-  document["identifiable"] = identifiable && n >= k && !best.uncertainty.rank_deficient;
+  document["identifiable"] = reasons.empty();
   document["reasons"] = reasons;
   document["residuals"] = json::array();
   for (std::size_t i = 0; i < n; ++i) {
@@ -812,7 +805,6 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
     csv << (std::isfinite(map_chi2[flat]) ? format_number(map_chi2[flat]) : "") << "\n";
   }
   io::write_file_atomic(dir / "identify_map.csv", csv.str());
-  std::vector<std::string> notes;
   if (std::string note = plot_map(dir, spec, axes, map_chi2, distinct, best); !note.empty()) notes.push_back(note);
   if (std::string note = plot_fit(dir, spec, best, weights); !note.empty()) notes.push_back(note);
   document["notes"] = notes;
@@ -826,7 +818,8 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
   log << "  chi2 = " << format_number(best.chi2) << " (" << n << " measurements, " << k << " unknowns), "
       << forward.runs() << " forward runs, " << (document["identifiable"].get<bool>() ? "identifiable" : "NOT identifiable")
       << "\n";
-  for (const std::string& reason : reasons) log << "  note: " << reason << "\n";
+  for (const std::string& reason : reasons) log << "  not identifiable: " << reason << "\n";
+  for (const std::string& note : notes) log << "  note: " << note << "\n";
   return document;
 }
 

@@ -79,7 +79,6 @@ struct IdentifyOptions {
   std::string executable;  ///< crackle executable for the forward runs (/proc/self/exe)
   int jobs = 0;            ///< forward runs at a time; 0: the cores
   std::string map_cache;   ///< folder of the map's forward runs (kept between measurement sets)
-  bool overwrite = false;
 };
 
 /// Runs the identification; progress to `log`. Returns the identify.json document.
