@@ -9,8 +9,10 @@
 ///    crackle's CHOLMOD factor (cholmod_factor.hpp) behind a PCSHELL with a shell ST operator;
 ///  - ARPACK dsaupd/dseupd in mode 3 (shift-invert, B = M) with a CHOLMOD factorisation of
 ///    K - sigma M, sequential (under MPI every rank solves the whole problem).
+#include <memory>
 #include <string>
 
+#include "core/mpi_session.hpp"
 #include "core/types.hpp"
 
 namespace crackle::modal {
@@ -86,6 +88,7 @@ class SlepcSession {
   int* argc_ = nullptr;
   char*** argv_ = nullptr;
   bool owns_ = false;
+  std::unique_ptr<MpiSessionFolder> session_folder_;  ///< when this session started MPI on its own
 };
 
 /// Rank of this process in PETSC_COMM_WORLD (0 when MPI is not initialised).

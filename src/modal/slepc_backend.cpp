@@ -139,6 +139,9 @@ SlepcSession::SlepcSession(int* argc, char*** argv, Start start) : argc_(argc), 
 
 void SlepcSession::initialise() {
   if (slepc_is_initialised()) return;
+  int mpi_started = 0;
+  MPI_Initialized(&mpi_started);
+  if (!mpi_started) session_folder_ = std::make_unique<MpiSessionFolder>();
   const PetscErrorCode code = SlepcInitialize(argc_, argv_, nullptr, nullptr);
   if (code != 0) throw SolverError("SlepcInitialize failed with error " + std::to_string(code));
   owns_ = true;
@@ -151,6 +154,7 @@ void SlepcSession::start() {
 SlepcSession::~SlepcSession() {
   if (deferred_session == this) deferred_session = nullptr;
   if (owns_) SlepcFinalize();
+  session_folder_.reset();  // after MPI_Finalize
 }
 
 namespace {

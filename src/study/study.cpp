@@ -270,7 +270,9 @@ Job StudyRun::case_job(int index) {
       argv.push_back("--modal-cache");
       argv.push_back(cache_path(study_case.modal_key).string());
     }
-    argv.push_back("--overwrite");  // the case folder holds the study's scene.yaml and log.txt
+    // The case folder holds the study's scene.yaml and log.txt: modal and run refuse such a folder
+    // without --overwrite; sweep writes into any folder (it has no such flag).
+    if (command != "sweep") argv.push_back("--overwrite");
     job.commands.push_back({command, argv});
   }
   return job;
