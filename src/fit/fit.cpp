@@ -131,23 +131,26 @@ Eigen::RowVectorXd spline_at(const std::vector<double>& x, const MatrixX& y, dou
 
 }  // namespace
 
+std::vector<VectorX> jacobian_points(const VectorX& theta, const Bounds& bounds, const VectorX& steps) {
+  std::vector<VectorX> points;
+  for (Eigen::Index j = 0; j < theta.size(); ++j) {
+    double h = steps[j] * (bounds.upper[j] - bounds.lower[j]);
+    if (theta[j] + h > bounds.upper[j]) h = -h;  // one-sided, towards the inside
+    VectorX point = theta;
+    point[j] += h;
+    points.push_back(point);
+  }
+  return points;
+}
+
 MatrixX jacobian(const BatchResiduals& residuals, const VectorX& theta, const VectorX& r0, const Bounds& bounds,
                  const VectorX& steps, int* evaluations) {
   const Eigen::Index k = theta.size();
-  std::vector<VectorX> points;
-  VectorX h(k);
-  for (Eigen::Index j = 0; j < k; ++j) {
-    const double width = bounds.upper[j] - bounds.lower[j];
-    h[j] = steps[j] * width;
-    if (theta[j] + h[j] > bounds.upper[j]) h[j] = -h[j];  // one-sided, towards the inside
-    VectorX point = theta;
-    point[j] += h[j];
-    points.push_back(point);
-  }
+  const std::vector<VectorX> points = jacobian_points(theta, bounds, steps);
   const std::vector<VectorX> values = residuals(points);
   if (evaluations) *evaluations += static_cast<int>(k);
   MatrixX result(r0.size(), k);
-  for (Eigen::Index j = 0; j < k; ++j) result.col(j) = (values.at(j) - r0) / h[j];
+  for (Eigen::Index j = 0; j < k; ++j) result.col(j) = (values.at(j) - r0) / (points[j][j] - theta[j]);
   return result;
 }
 

@@ -49,6 +49,10 @@ struct FitResult {
   std::vector<bool> at_bound;  ///< per unknown: within 1e-6 of its width of a bound
 };
 
+/// The k points of a finite-difference Jacobian at theta: theta + h_j e_j, h_j = steps_j (upper_j -
+/// lower_j), negated where that would leave the bounds (so a caller can evaluate them ahead).
+std::vector<VectorX> jacobian_points(const VectorX& theta, const Bounds& bounds, const VectorX& steps);
+
 /// Central or one-sided finite-difference Jacobian of the residuals at theta (residuals r0 there),
 /// one batch of k evaluations: theta + h_j e_j, h_j = steps_j (upper_j - lower_j), negated where
 /// that would leave the bounds.

@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include <Eigen/Cholesky>
+#include <Eigen/QR>
 #include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
@@ -44,6 +45,12 @@ constexpr double kEqualFit = 1.0;
 /// model smooth to ~1e-9 relative (morphed mesh, eigen-solve tolerance 1e-10), sqrt of which is the
 /// classic choice; 1e-4 of a width keeps the truncation error below the noise of a 0.05 % frequency.
 constexpr double kForwardStep = 1e-4;
+/// A local fit has converged when the forward model's Gauss-Newton step is at most this many of the
+/// estimate's standard deviations (Mahalanobis): a further step would move it by less than 1/20 of
+/// its 95 % interval.
+constexpr double kAccept = 0.1;
+/// Gauss-Newton iterations on the forward model before Levenberg-Marquardt takes over.
+constexpr int kGaussNewtonIterations = 4;
 /// chi^2 quantile of 2 degrees of freedom at 95 % (the joint region of two unknowns).
 constexpr double kChi2Two95 = 5.991464547107979;
 
@@ -149,25 +156,147 @@ int uniform_index(double at, double origin, double size, int cells) {
   return static_cast<int>(std::lround((at - origin) / size * cells));
 }
 
-/// The forward model: batches of parameter vectors run as studies of `crackle modal` cases.
+/// Rows of a sweep.csv: the excitation frequency and the named columns.
+struct SweepTable {
+  std::vector<std::string> header;
+  std::vector<std::vector<double>> rows;
+};
+
+SweepTable read_sweep_csv(const fs::path& path) {
+  std::ifstream file(path);
+  if (!file) throw SolverError("identify: no " + path.string());
+  SweepTable table;
+  std::string line;
+  if (std::getline(file, line)) table.header = split_csv(line);
+  while (std::getline(file, line)) {
+    if (line.empty()) continue;
+    std::vector<double> row;
+    for (const std::string& cell : split_csv(line)) {
+      double value = kNaN;
+      scene::parse_number(cell, value);
+      row.push_back(value);
+    }
+    table.rows.push_back(row);
+  }
+  return table;
+}
+
+/// A harmonic quantity of a probe at the drive frequency, linearly interpolated between the two
+/// sweep points around it (the sweep is a narrow range about it: the points lie 1e-4 apart).
+double sweep_value(const SweepTable& table, const Measurement& m) {
+  const std::string column = m.quantity == "A1" ? "A1 [m]" : m.quantity + " [-]";
+  const std::string prefix = m.probe + " u_";
+  std::size_t index = table.header.size();
+  for (std::size_t c = 0; c < table.header.size(); ++c) {
+    const std::string& name = table.header[c];
+    if (name.rfind(prefix, 0) == 0 && name.size() >= column.size() &&
+        name.compare(name.size() - column.size(), column.size(), column) == 0 && name.size() == prefix.size() + 2 + column.size())
+      index = c;
+  }
+  if (index == table.header.size()) return kNaN;
+  for (std::size_t r = 0; r + 1 < table.rows.size(); ++r) {
+    const double f0 = table.rows[r][0], f1 = table.rows[r + 1][0];
+    if ((f0 - m.drive_hz) * (f1 - m.drive_hz) > 0.0 || f0 == f1) continue;
+    const double w = (m.drive_hz - f0) / (f1 - f0);
+    return (1.0 - w) * table.rows[r][index] + w * table.rows[r + 1][index];
+  }
+  return kNaN;
+}
+
+/// Half-width of the sweep about a drive frequency, relative.
+constexpr double kSweepHalfWidth = 1e-4;
+
+/// The forward model: batches of parameter vectors run as studies of `crackle modal` cases for the
+/// frequencies and, when harmonic quantities are measured, of `crackle sweep` cases (one per drive
+/// frequency: a narrow harmonic-balance sweep about it) for those. Two studies, because the modal
+/// command grades its mesh towards the crack front and the sweep's reduced model does not.
 class Forward {
  public:
   Forward(const IdentifySpec& spec, YAML::Node base, const IdentifyOptions& options, std::ostream& log)
-      : spec_(spec), base_(std::move(base)), options_(options), log_(log) {}
+      : spec_(spec), base_(std::move(base)), options_(options), log_(log) {
+    std::set<double> drives;
+    for (const Measurement& m : spec_.measured) {
+      if (!is_frequency(m.quantity)) drives.insert(m.drive_hz);
+      if (is_frequency(m.quantity)) frequencies_ = true;
+    }
+    drives_.assign(drives.begin(), drives.end());
+  }
 
-  /// Model values of every measurement at each theta; `folder` holds the batch's study (a rerun with
-  /// the same parameters reuses its cases). `orders`: a mesh.box.order per theta (empty: the scene's).
+  /// Model values of every measurement at each theta; `folder` holds the batch's studies (a rerun
+  /// with the same parameters reuses their cases). `orders`: a mesh.box.order per theta (empty: the
+  /// scene's).
   std::vector<VectorX> models(const std::vector<VectorX>& thetas, const fs::path& folder, bool progress,
                               const std::vector<int>& orders = {}) {
+    std::vector<json> modal;
+    std::vector<std::vector<SweepTable>> sweeps(thetas.size());
+    if (frequencies_) {
+      const std::vector<fs::path> cases = run_cases(thetas, {}, orders, folder, progress);
+      for (const fs::path& case_dir : cases) {
+        std::ifstream stream(case_dir / "modal.json");
+        modal.push_back(json::parse(stream));
+      }
+    }
+    if (!drives_.empty()) {
+      const std::vector<fs::path> cases =
+          run_cases(thetas, drives_, orders, frequencies_ ? folder / "sweep" : folder, progress && !frequencies_);
+      for (std::size_t c = 0; c < cases.size(); ++c) sweeps[c / drives_.size()].push_back(read_sweep_csv(cases[c] / "sweep.csv"));
+    }
+    std::vector<VectorX> result;
+    for (std::size_t t = 0; t < thetas.size(); ++t) {
+      VectorX m(static_cast<Eigen::Index>(spec_.measured.size()));
+      for (std::size_t i = 0; i < spec_.measured.size(); ++i) {
+        const Measurement& measurement = spec_.measured[i];
+        double value = kNaN;
+        if (!is_frequency(measurement.quantity)) {
+          const std::size_t d = static_cast<std::size_t>(
+              std::lower_bound(drives_.begin(), drives_.end(), measurement.drive_hz) - drives_.begin());
+          value = sweep_value(sweeps[t][d], measurement);
+        } else {
+          const json& pairs = modal[t]["pairs"];
+          if (static_cast<std::size_t>(measurement.mode) <= pairs.size()) {
+            const json& pair = pairs[static_cast<std::size_t>(measurement.mode - 1)];
+            const bool paired = pair.value("paired", true);
+            if (measurement.quantity == "f_uncracked") value = pair["f_uncracked_hz"].get<double>();
+            if (measurement.quantity == "f_open" && paired) value = pair["f_open_hz"].get<double>();
+            if (measurement.quantity == "f_bilinear" && paired) value = pair["f_bilinear_hz"].get<double>();
+          }
+        }
+        m[static_cast<Eigen::Index>(i)] = value;
+      }
+      result.push_back(m);
+    }
+    return result;
+  }
+
+  int runs() const { return runs_; }
+
+ private:
+  /// One study over the thetas (times the drive frequencies, when given: `crackle sweep` cases);
+  /// the case folders in order (theta-major). SolverError names a case that failed.
+  std::vector<fs::path> run_cases(const std::vector<VectorX>& thetas, const std::vector<double>& drives,
+                                  const std::vector<int>& orders, const fs::path& folder, bool progress) {
+    const std::size_t per_theta = std::max<std::size_t>(1, drives.size());
     YAML::Node document = YAML::Clone(base_);
+    if (!drives.empty()) {
+      // The sweep of each case: its range is set per case; no stability (amplitudes only).
+      YAML::Node sweep = document["sweep"] ? document["sweep"] : YAML::Node(YAML::NodeType::Map);
+      sweep["frequency"] = YAML::Node(YAML::NodeType::Map);
+      sweep["frequency"]["from"] = 1.0;
+      sweep["frequency"]["to"] = 2.0;
+      sweep["points"] = 2;
+      sweep["stability"] = false;
+      if (sweep["subharmonic"]) sweep.remove("subharmonic");
+      document["sweep"] = sweep;
+    }
     YAML::Node vary(YAML::NodeType::Map);
     std::map<std::string, std::vector<std::string>> values;
     for (const VectorX& theta : thetas) {
       std::map<std::string, YAML::Node> lists;
+      std::vector<std::pair<std::string, std::string>> entries_of_theta;
       for (std::size_t j = 0; j < spec_.unknowns.size(); ++j) {
         const Unknown& u = spec_.unknowns[j];
         if (u.index < 0) {
-          values[u.path].push_back(format_number(theta[static_cast<Eigen::Index>(j)]));
+          entries_of_theta.emplace_back(u.path, format_number(theta[static_cast<Eigen::Index>(j)]));
           continue;
         }
         if (!lists.count(u.path)) lists[u.path] = YAML::Clone(node_at(base_, u.path));
@@ -176,7 +305,14 @@ class Forward {
       for (auto& [path, list] : lists) {
         std::vector<std::string> entries;
         for (const auto& item : list) entries.push_back(item.Scalar());
-        values[path].push_back("[" + join(entries) + "]");
+        entries_of_theta.emplace_back(path, "[" + join(entries) + "]");
+      }
+      for (std::size_t d = 0; d < per_theta; ++d) {
+        for (const auto& [path, text] : entries_of_theta) values[path].push_back(text);
+        if (!drives.empty()) {
+          values["sweep.frequency.from"].push_back(format_number(drives[d] * (1.0 - kSweepHalfWidth)));
+          values["sweep.frequency.to"].push_back(format_number(drives[d] * (1.0 + kSweepHalfWidth)));
+        }
       }
     }
     for (const auto& [path, list] : values) {
@@ -186,12 +322,13 @@ class Forward {
     }
     if (!orders.empty()) {
       YAML::Node seq(YAML::NodeType::Sequence);
-      for (int order : orders) seq.push_back(order);
+      for (int order : orders)
+        for (std::size_t d = 0; d < per_theta; ++d) seq.push_back(order);
       vary["mesh.box.order"] = seq;
     }
     document["study"]["vary"] = vary;
     document["study"]["mode"] = "zip";
-    document["study"]["outputs"] = std::vector<std::string>{"modal"};
+    document["study"]["outputs"] = std::vector<std::string>{drives.empty() ? "modal" : "sweep"};
     fs::create_directories(folder);
     YAML::Emitter out;
     out << document;
@@ -207,12 +344,12 @@ class Forward {
     std::ostringstream quiet;
     const int code = study::run_study(study, progress ? log_ : quiet);
     if (code == 130) throw SolverError("identify: interrupted");
-    std::vector<VectorX> result;
-    for (std::size_t c = 0; c < thetas.size(); ++c) {
+    std::vector<fs::path> cases;
+    const std::string wanted = drives.empty() ? "modal.json" : "sweep.csv";
+    for (std::size_t c = 0; c < thetas.size() * per_theta; ++c) {
       const fs::path case_dir = folder / "runs" / study::case_folder(static_cast<int>(c));
-      const fs::path modal = case_dir / "modal.json";
-      if (!fs::exists(modal)) {
-        std::string error = "no modal.json";
+      if (!fs::exists(case_dir / wanted)) {
+        std::string error = "no " + wanted;
         try {
           std::ifstream record(case_dir / "case.json");
           const json value = json::parse(record);
@@ -221,35 +358,18 @@ class Forward {
         }
         throw SolverError("identify: forward run " + case_dir.string() + " failed: " + error);
       }
-      std::ifstream stream(modal);
-      const json document_json = json::parse(stream);
-      VectorX m(static_cast<Eigen::Index>(spec_.measured.size()));
-      for (std::size_t i = 0; i < spec_.measured.size(); ++i) {
-        const Measurement& measurement = spec_.measured[i];
-        double value = kNaN;
-        const json& pairs = document_json["pairs"];
-        if (static_cast<std::size_t>(measurement.mode) <= pairs.size()) {
-          const json& pair = pairs[static_cast<std::size_t>(measurement.mode - 1)];
-          const bool paired = pair.value("paired", true);
-          if (measurement.quantity == "f_uncracked") value = pair["f_uncracked_hz"].get<double>();
-          if (measurement.quantity == "f_open" && paired) value = pair["f_open_hz"].get<double>();
-          if (measurement.quantity == "f_bilinear" && paired) value = pair["f_bilinear_hz"].get<double>();
-        }
-        m[static_cast<Eigen::Index>(i)] = value;
-      }
-      result.push_back(m);
+      cases.push_back(case_dir);
     }
-    runs_ += static_cast<int>(thetas.size());
-    return result;
+    runs_ += static_cast<int>(cases.size());
+    return cases;
   }
 
-  int runs() const { return runs_; }
-
- private:
   const IdentifySpec& spec_;
   YAML::Node base_;
   const IdentifyOptions& options_;
   std::ostream& log_;
+  bool frequencies_ = false;    ///< a frequency is measured
+  std::vector<double> drives_;  ///< distinct drive frequencies of the harmonic measurements [Hz]
   int runs_ = 0;
 };
 
@@ -378,6 +498,11 @@ const std::vector<std::string>& frequency_quantities() {
   return names;
 }
 
+const std::vector<std::string>& computed_quantities() {
+  static const std::vector<std::string> names = {"f_uncracked", "f_open", "f_bilinear", "A1", "A2/A1", "A3/A1"};
+  return names;
+}
+
 const std::vector<std::string>& all_quantities() {
   static const std::vector<std::string> names = {"f_uncracked", "f_open", "f_bilinear", "damping_ratio",
                                                  "A1",          "A2/A1",  "A3/A1",      "A1/2/A1"};
@@ -447,8 +572,8 @@ IdentifySpec parse_identify_section(const std::string& text, const std::string& 
       section = entry.second;
       spec.line = scene::mark_line(entry.first);
     }
-  if (!section.IsMap()) fail(file, spec.line, "identify", "a map with keys unknowns, measured, map, sigma", scene::describe_node(section));
-  const std::vector<std::string> keys = {"unknowns", "measured", "map", "sigma"};
+  if (!section.IsMap()) fail(file, spec.line, "identify", "a map with keys unknowns, measured, map, sigma, truth", scene::describe_node(section));
+  const std::vector<std::string> keys = {"unknowns", "measured", "map", "sigma", "truth"};
   for (const auto& entry : section) {
     const std::string key = entry.first.Scalar();
     if (std::find(keys.begin(), keys.end(), key) == keys.end())
@@ -522,6 +647,22 @@ IdentifySpec parse_identify_section(const std::string& text, const std::string& 
       fail(file, scene::mark_line(sigma), "identify.sigma", "one of scaled, trusted", "'" + word + "'");
     spec.scale_by_fit = word == "scaled";
   }
+  if (const YAML::Node truth = section["truth"]) {
+    const int line = scene::mark_line(truth);
+    if (!truth.IsMap()) fail(file, line, "identify.truth", "a map {unknown: value} over the unknowns", scene::describe_node(truth));
+    std::vector<std::string> names;
+    for (const Unknown& u : spec.unknowns) names.push_back(u.key);
+    for (const auto& entry : truth) {
+      const std::string key = entry.first.Scalar();
+      if (std::find(names.begin(), names.end(), key) == names.end())
+        fail(file, scene::mark_line(entry.first), "identify.truth." + key, "one of the unknowns " + join(names),
+             "'" + key + "'" + scene::suggestion(key, names));
+    }
+    for (const Unknown& u : spec.unknowns) {
+      if (!truth[u.key]) fail(file, line, "identify.truth." + u.key, "the true value of every unknown", "nothing");
+      spec.truth.push_back(number_of(truth[u.key], file, "identify.truth." + u.key));
+    }
+  }
   return spec;
 }
 
@@ -538,18 +679,20 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
     throw InputError(file + ": identify: expected a box mesh with a crack (crack.plane and crack.region), got " +
                      (scene.gmsh_file.empty() ? "no crack" : "a Gmsh mesh (its crack cannot be moved)"));
   for (const Measurement& m : spec.measured) {
-    if (std::find(frequency_quantities().begin(), frequency_quantities().end(), m.quantity) ==
-        frequency_quantities().end()) {
-      if (!is_frequency(m.quantity)) {
-        bool found = false;
-        if (scene.transient)
-          for (const auto& probe : scene.transient->probes) found = found || probe.name == m.probe;
-        if (!found) throw InputError(m.where + ": probe: expected a probe of the scene's transient.probes, got '" + m.probe + "'");
-      }
-      throw InputError(m.where + ": quantity: expected one of " + join(frequency_quantities()) +
-                       " (identify computes modal frequencies only so far), got '" + m.quantity + "'");
+    if (!is_frequency(m.quantity)) {
+      bool found = false;
+      if (scene.transient)
+        for (const auto& probe : scene.transient->probes) found = found || probe.name == m.probe;
+      if (!found) throw InputError(m.where + ": probe: expected a probe of the scene's transient.probes, got '" + m.probe + "'");
+      if (!scene.transient->excitation || scene.transient->excitation->kind != "harmonic")
+        throw InputError(m.where + ": quantity " + m.quantity + ": expected a scene with a harmonic transient.excitation "
+                         "(its load is driven at drive_hz), got " + (scene.transient->excitation ? "a pulse" : "none"));
     }
-    if (m.mode > scene.modal.modes)
+    const auto& computed = computed_quantities();
+    if (std::find(computed.begin(), computed.end(), m.quantity) == computed.end())
+      throw InputError(m.where + ": quantity: expected one of " + join(computed) +
+                       " (identify does not compute damping ratios or the period-two branch yet), got '" + m.quantity + "'");
+    if (is_frequency(m.quantity) && m.mode > scene.modal.modes)
       throw InputError(m.where + ": mode: expected a mode the scene solves (modal.modes = " +
                        std::to_string(scene.modal.modes) + "), got " + std::to_string(m.mode));
   }
@@ -621,10 +764,27 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
     }
     grid.push_back(theta);
   }
-  log << "identify: map of " << total << " forward runs (" << spec.map_points << " per unknown)\n";
+  // ---- 1 and 2: the map, and the model error in the middle of the bounds (the reference crack;
+  // independent of the measurements, so a cached map keeps it too) from the orders p, p+1, p+2
+  // (Richardson): one batch, the highest order first (the longest run starts while the map fills
+  // the other cores).
+  const VectorX middle = 0.5 * (bounds.lower + bounds.upper);
+  const int p = scene.box.order;
+  const int first = std::min(p, 2);
+  const std::vector<int> levels = {first, first + 1, first + 2};
+  log << "identify: map of " << total << " forward runs (" << spec.map_points << " per unknown) and the model error "
+      << "from the orders " << levels[0] << ", " << levels[1] << ", " << levels[2] << " in the middle of the bounds\n";
   const fs::path map_dir = options.map_cache.empty() ? dir / "map" : fs::path(options.map_cache);
-  const std::vector<VectorX> map_models = forward.models(grid, map_dir, true);
-  const int map_runs = forward.runs();
+  std::vector<VectorX> map_batch = {middle, middle, middle};
+  std::vector<int> orders = {levels[2], levels[1], levels[0]};
+  for (const VectorX& theta : grid) {
+    map_batch.push_back(theta);
+    orders.push_back(p);
+  }
+  const std::vector<VectorX> batch_models = forward.models(map_batch, map_dir, true, orders);
+  const std::vector<VectorX> level_models = {batch_models[2], batch_models[1], batch_models[0]};
+  const std::vector<VectorX> map_models(batch_models.begin() + 3, batch_models.end());
+  const int map_runs = static_cast<int>(total);
 
   VectorX values(static_cast<Eigen::Index>(n)), sigma(static_cast<Eigen::Index>(n));
   for (std::size_t i = 0; i < n; ++i) {
@@ -640,16 +800,6 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
   std::vector<std::size_t> minima = fit::grid_minima(axes, map_chi2);
   if (minima.empty()) throw SolverError("identify: no finite misfit on the map (no mode paired anywhere)");
 
-  // ---- 2. the model error at the middle of the bounds (the reference crack; independent of the
-  // measurements, so a cached map keeps it too): orders p, p+1, p+2 (Richardson)
-  const VectorX best_grid = 0.5 * (bounds.lower + bounds.upper);
-  const int p = scene.box.order;
-  const int first = std::min(p, 2);
-  const std::vector<int> levels = {first, first + 1, first + 2};
-  log << "identify: model error from the orders " << levels[0] << ", " << levels[1] << ", " << levels[2]
-      << " in the middle of the bounds\n";
-  const std::vector<VectorX> level_models =
-      forward.models({best_grid, best_grid, best_grid}, map_dir / "accuracy", false, levels);
   VectorX model_error(static_cast<Eigen::Index>(n));
   std::vector<bool> error_verified(n, true);
   for (std::size_t i = 0; i < n; ++i) {
@@ -686,34 +836,98 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
   for (std::size_t index : minima)
     if (map_chi2[index] <= best_map + kMinimaSpread && starts.size() < kMaxStarts) starts.push_back(index);
 
-  // ---- 3. local fits: on the map's interpolant, then on the forward model
+  // ---- 3. local fits: on the map's interpolant; the forward model checks each (one batch for all)
   const fit::TensorSpline spline(axes, map_models);
   const fit::BatchResiduals on_spline = [&](const std::vector<VectorX>& thetas) {
     std::vector<VectorX> out;
     for (const VectorX& theta : thetas) out.push_back((spline(theta) - values).cwiseQuotient(weights));
     return out;
   };
+  // Forward residuals by parameter vector, each computed once: fit_bounded asks for its start, its
+  // end and their Jacobians again, which the check batch below already has.
+  std::map<std::vector<double>, VectorX> computed;
   int batch = 0;
   const fit::BatchResiduals on_model = [&](const std::vector<VectorX>& thetas) {
-    char name[16];
-    std::snprintf(name, sizeof name, "%04d", batch++);
+    std::vector<VectorX> missing;
+    for (const VectorX& theta : thetas)
+      if (!computed.count(std::vector<double>(theta.data(), theta.data() + theta.size()))) missing.push_back(theta);
+    if (!missing.empty()) {
+      char name[16];
+      std::snprintf(name, sizeof name, "%04d", batch++);
+      const std::vector<VectorX> models = forward.models(missing, dir / "fit" / name, false);
+      for (std::size_t i = 0; i < missing.size(); ++i)
+        computed[std::vector<double>(missing[i].data(), missing[i].data() + missing[i].size())] =
+            (models[i] - values).cwiseQuotient(weights);
+    }
     std::vector<VectorX> out;
-    for (const VectorX& m : forward.models(thetas, dir / "fit" / name, false)) out.push_back((m - values).cwiseQuotient(weights));
+    for (const VectorX& theta : thetas) out.push_back(computed.at(std::vector<double>(theta.data(), theta.data() + theta.size())));
     return out;
   };
-  std::vector<Fitted> fitted;
+  const VectorX steps = VectorX::Constant(static_cast<Eigen::Index>(k), kForwardStep);
+  std::vector<VectorX> smooth_estimates, check_points;
   for (std::size_t s = 0; s < starts.size(); ++s) {
     fit::FitOptions smooth;
     smooth.steps = VectorX::Constant(static_cast<Eigen::Index>(k), 1e-6);
-    const fit::FitResult coarse = fit::fit_bounded(on_spline, grid[starts[s]], bounds, smooth);
-    fit::FitOptions exact;
-    exact.steps = VectorX::Constant(static_cast<Eigen::Index>(k), kForwardStep);
-    exact.max_iterations = 8;
-    exact.function_tolerance = 1e-8;
-    exact.parameter_tolerance = 1e-7;
-    log << "identify: local fit " << s + 1 << "/" << starts.size() << " from the map minimum chi2 = "
-        << format_number(map_chi2[starts[s]]) << "\n";
-    const fit::FitResult result = fit::fit_bounded(on_model, coarse.theta, bounds, exact);
+    smooth_estimates.push_back(fit::fit_bounded(on_spline, grid[starts[s]], bounds, smooth).theta);
+    check_points.push_back(smooth_estimates.back());
+    for (const VectorX& point : fit::jacobian_points(smooth_estimates.back(), bounds, steps)) check_points.push_back(point);
+  }
+  log << "identify: the forward model at the interpolant's " << starts.size() << " estimate(s) and their Jacobians ("
+      << check_points.size() << " runs)\n";
+  on_model(check_points);
+  std::vector<Fitted> fitted;
+  int forward_fits = 0, gauss_newton = 0;
+  for (std::size_t s = 0; s < starts.size(); ++s) {
+    // Gauss-Newton on the forward model from the interpolant's estimate, until its step is below
+    // kAccept of the estimate's standard deviation (each iteration one batch: the point and its
+    // Jacobian); Levenberg-Marquardt takes over when a step does not lower chi^2.
+    VectorX theta = smooth_estimates[s];
+    fit::FitResult result;
+    bool accepted = false;
+    double previous = std::numeric_limits<double>::infinity();
+    for (int iteration = 0; iteration < kGaussNewtonIterations && !accepted; ++iteration) {
+      std::vector<VectorX> points = {theta};
+      for (const VectorX& point : fit::jacobian_points(theta, bounds, steps)) points.push_back(point);
+      on_model(points);
+      const VectorX r0 = on_model({theta}).front();
+      if (!r0.allFinite() || !(r0.squaredNorm() < previous)) break;
+      previous = r0.squaredNorm();
+      ++gauss_newton;
+      const MatrixX j0 = fit::jacobian(on_model, theta, r0, bounds, steps);
+      const fit::Uncertainty u0 = fit::uncertainty(j0, theta, r0.squaredNorm(), spec.scale_by_fit);
+      if (!j0.allFinite() || u0.rank_deficient) break;
+      // The Gauss-Newton step, kept inside the bounds, in units of the covariance (Mahalanobis).
+      const VectorX step = j0.colPivHouseholderQr().solve(-r0);
+      const VectorX moved = (theta + step).cwiseMax(bounds.lower).cwiseMin(bounds.upper) - theta;
+      const double change = (r0.squaredNorm() - (r0 + j0 * moved).squaredNorm()) / u0.s2;
+      const double step_in_sd = std::sqrt(std::max(change, 0.0));
+      log << "identify: minimum " << s + 1 << "/" << starts.size() << ", Gauss-Newton iteration " << iteration + 1
+          << ": chi2 " << format_number(r0.squaredNorm()) << ", step " << format_number(step_in_sd) << " sd\n";
+      if (step_in_sd <= kAccept) {
+        accepted = true;
+        result.theta = theta;
+        result.residuals = r0;
+        result.jacobian = j0;
+        result.chi2 = r0.squaredNorm();
+        result.converged = true;
+        for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(k); ++j) {
+          const double margin = 1e-6 * (bounds.upper[j] - bounds.lower[j]);
+          result.at_bound.push_back(theta[j] <= bounds.lower[j] + margin || theta[j] >= bounds.upper[j] - margin);
+        }
+      } else {
+        theta += moved;
+      }
+    }
+    if (!accepted) {
+      fit::FitOptions exact;
+      exact.steps = steps;
+      exact.max_iterations = 8;
+      exact.function_tolerance = 1e-8;
+      exact.parameter_tolerance = 1e-7;
+      log << "identify: minimum " << s + 1 << "/" << starts.size() << ": Levenberg-Marquardt on the forward model\n";
+      result = fit::fit_bounded(on_model, smooth_estimates[s], bounds, exact);
+      ++forward_fits;
+    }
     Fitted f;
     f.theta = result.theta;
     f.chi2 = result.chi2;
@@ -793,6 +1007,36 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
   document["reference_crack"] = {{"at", reference.at}};
   document["map"] = {{"points_per_unknown", spec.map_points}, {"runs", map_runs}, {"folder", map_dir.string()},
                      {"best_chi2", best_map}, {"minima_kept", starts.size()}};
+  if (!spec.truth.empty()) {
+    // A synthetic test: the error against the truth, and the Cramer-Rao bound there (the
+    // Gauss-Newton covariance with the sigmas trusted, DETECTION.md sec. 2) from one batch of runs.
+    const VectorX truth = Eigen::Map<const VectorX>(spec.truth.data(), static_cast<Eigen::Index>(k));
+    std::vector<VectorX> points = {truth};
+    for (const VectorX& point : fit::jacobian_points(truth, bounds, steps)) points.push_back(point);
+    const std::vector<VectorX> models = forward.models(points, map_dir / "truth", false);
+    MatrixX jacobian(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(k));
+    for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(k); ++j)
+      jacobian.col(j) = (models[static_cast<std::size_t>(j) + 1] - models[0]).cwiseQuotient(weights) /
+                        (points[static_cast<std::size_t>(j) + 1][j] - truth[j]);
+    const fit::Uncertainty bound = fit::uncertainty(jacobian, truth, 0.0, false);
+    // The same with the measurement noise alone (no model error in the weights): the scatter that
+    // noise alone would give an unbiased estimator.
+    const MatrixX noise_jacobian = weights.cwiseQuotient(sigma).asDiagonal() * jacobian;
+    const fit::Uncertainty noise_bound = fit::uncertainty(noise_jacobian, truth, 0.0, false);
+    json inside = json::object(), error = json::object(), in_bound = json::object();
+    for (std::size_t j = 0; j < k; ++j) {
+      const Eigen::Index jj = static_cast<Eigen::Index>(j);
+      const auto& interval = best.uncertainty.interval_95[j];
+      inside[spec.unknowns[j].key] = interval[0] <= truth[jj] && truth[jj] <= interval[1];
+      error[spec.unknowns[j].key] = best.theta[jj] - truth[jj];
+      in_bound[spec.unknowns[j].key] = (best.theta[jj] - truth[jj]) / bound.sd[jj];
+    }
+    document["truth"] = {{"value", keyed(spec, truth)}, {"error", error}, {"inside_95", inside},
+                         {"cramer_rao_sd", keyed(spec, bound.sd)}, {"error_in_cramer_rao_sd", in_bound},
+                         {"cramer_rao_noise_sd", keyed(spec, noise_bound.sd)},
+                         {"chi2_at_truth", ((models[0] - values).cwiseQuotient(weights)).squaredNorm()}};
+  }
+  document["local_fits"] = {{"gauss_newton_iterations", gauss_newton}, {"levenberg_marquardt", forward_fits}};
   document["forward_runs"] = forward.runs();
   document["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 

@@ -10,18 +10,26 @@
 ///   measured:                        # a list, or the path of a CSV file
 ///     - {quantity: f_bilinear, mode: 1, value: 205.9, sigma: 0.1}
 ///   map: {points: 7}                 # the global map: points per unknown
+///   truth:                           # optional: a synthetic test's truth
+///     crack.plane.at: 0.05
+///     crack.region.z[0]: 0.007
 /// ```
 ///
-/// The forward model is the scene's modal solve (`crackle modal`) with the grid made for a reference
+/// The forward model is the scene's modal solve (`crackle modal`), or with harmonic quantities the
+/// scene's harmonic-balance sweep (`crackle sweep`, narrow about each drive frequency), with the
+/// grid made for a reference
 /// crack in the middle of the bounds and moved onto each crack (crack.reference, mesh::morph_lines),
 /// so that it is smooth in the unknowns. Every forward run is a case of a study (src/study): in
 /// parallel, resumable, cached by the hash of its scene. Steps:
 /// 1. the map: a grid of points per unknown (DIR/map, or --map-cache), chi^2 (eq. 7) on it, and
 ///    every local minimum within kMinimaSpread of the best;
-/// 2. the model error of each measured quantity: the modal solve at the best map point on the
-///    orders p, p+1, p+2, Richardson (DETECTION.md eq. 2), weighted in as sqrt(sigma^2 + eps^2);
-/// 3. from each kept minimum: a bounded Levenberg-Marquardt fit on the map's cubic interpolant,
-///    then on the forward model itself (fit::fit_bounded; Jacobians by one batch of forward runs);
+/// 2. the model error of each measured quantity, in the map's batch: the forward model in the middle
+///    of the bounds on the orders p, p+1, p+2, Richardson (DETECTION.md eq. 2), weighted in as
+///    sqrt(sigma^2 + eps^2);
+/// 3. from each kept minimum: a bounded Levenberg-Marquardt fit on the map's cubic interpolant;
+///    then Gauss-Newton on the forward model from there (the first Jacobians of all minima in one
+///    batch) until its step is below 0.1 of the estimate's standard deviation; Levenberg-Marquardt
+///    on the forward model (fit::fit_bounded) when a step does not lower chi^2;
 /// 4. the Gauss-Newton covariance, 95 % intervals (Student t), correlations, and the flags.
 /// Outputs: identify.json, identify_map.csv, identify_map.png, identify_fit.png.
 #include <iosfwd>
@@ -52,9 +60,11 @@ struct Measurement {
   std::string where;  ///< "file:line" for messages
 };
 
-/// The quantities identify can compute now (modal frequencies of the uncracked, open and
-/// bilinear limits), and those the section accepts but no forward model computes yet.
+/// Modal frequencies (per mode); the quantities identify computes (those and the harmonics of a
+/// probe at a drive frequency, by harmonic balance); all that the section accepts (damping_ratio and
+/// A1/2/A1 are checked, then refused as not yet computed).
 const std::vector<std::string>& frequency_quantities();
+const std::vector<std::string>& computed_quantities();
 const std::vector<std::string>& all_quantities();
 
 struct IdentifySpec {
@@ -62,6 +72,9 @@ struct IdentifySpec {
   std::vector<Measurement> measured;
   int map_points = 7;        ///< per unknown
   bool scale_by_fit = true;  ///< s^2 = chi^2/(n - k) with Student t (eq. 8); false: sigmas trusted
+  /// identify.truth: the known unknowns of a synthetic test, one per unknown (empty: none). The
+  /// result then reports the error, whether the intervals hold it, and the Cramer-Rao bound there.
+  std::vector<double> truth;
   int line = -1;
 };
 

@@ -1009,9 +1009,11 @@ const Param& identify_parameters() {
                          "bounds (crack.reference).", {}).required(),
       list_of("measured", "The measurements, or the path of a CSV file (relative to the scene) with the header "
                           "quantity,mode,probe,drive_hz,value,sigma and empty cells where a column does not apply.", {
-        choice("quantity", "What was measured: modal frequencies per uncracked mode (f_uncracked, f_open, f_bilinear; "
-                           "computed by identify now), or damping_ratio, A1, A2/A1, A3/A1, A1/2/A1 (accepted and "
-                           "checked, refused as not yet computed).",
+        choice("quantity", "What was measured: modal frequencies per uncracked mode (f_uncracked, f_open, f_bilinear: "
+                           "the modal solve), or a probe's harmonics at a drive frequency (A1 [m], A2/A1, A3/A1: "
+                           "harmonic balance on the reduced model, a narrow crackle sweep about drive_hz with the "
+                           "scene's excitation, damping and sweep settings); damping_ratio and A1/2/A1 are accepted "
+                           "and checked, then refused as not yet computed.",
                {"f_uncracked", "f_open", "f_bilinear", "damping_ratio", "A1", "A2/A1", "A3/A1", "A1/2/A1"}).required(),
         integer("mode", "Uncracked mode number (1 = lowest; open modes paired by MAC), for the frequencies.").at_least(1),
         text("probe", "A probe of transient.probes, for the harmonic quantities."),
@@ -1024,6 +1026,9 @@ const Param& identify_parameters() {
       }),
       choice("sigma", "scaled: covariance s^2 (J^T J)^-1 with s^2 = chi^2/(n - k) and Student's t; trusted: s^2 = 1 and "
                       "the normal quantile.", {"scaled", "trusted"}).defaults_to("scaled"),
+      map_of("truth", "A synthetic test's true value of every unknown {key: value}: identify.json `truth` then gives the "
+                      "error, whether each 95 % interval holds the truth, and the Cramer-Rao bound there (the "
+                      "Gauss-Newton standard deviation at the truth, sigmas trusted).", {}),
   }).optional_section()});
   return table;
 }
