@@ -45,9 +45,14 @@ namespace {
 
 // ---- streams: text lines to a Python callable ----------------------------------------------
 
+/// The Python error that stops the call: a KeyboardInterrupt (or what a SIGINT handler raised)
+/// found by the interrupt check or raised inside a progress callback.
+std::unique_ptr<py::error_already_set> pending_error;
+
 /// A streambuf that hands every line (ended by \n or \r, as progress lines are) to a Python
 /// callable `sink(line)`, taking the GIL for it. Errors raised by the sink are reported as
-/// unraisable and do not stop the run.
+/// unraisable and do not stop the run, but for a KeyboardInterrupt (Python runs its signal
+/// handlers inside the sink too): it is kept, and the next interrupt poll stops the run.
 class LineBuffer : public std::streambuf {
  public:
   explicit LineBuffer(py::object sink) : sink_(std::move(sink)) {}
@@ -63,7 +68,11 @@ class LineBuffer : public std::streambuf {
     try {
       sink_(text);
     } catch (py::error_already_set& error) {
-      error.discard_as_unraisable("crackle progress callback");
+      if (error.matches(PyExc_KeyboardInterrupt)) {
+        if (!pending_error) pending_error = std::make_unique<py::error_already_set>(std::move(error));
+      } else {
+        error.discard_as_unraisable("crackle progress callback");
+      }
     }
   }
 
@@ -98,12 +107,10 @@ class CerrRedirect {
 
 // ---- KeyboardInterrupt ---------------------------------------------------------------------
 
-/// The Python error the interrupt check found (KeyboardInterrupt, or what a SIGINT handler raised).
-std::unique_ptr<py::error_already_set> pending_error;
-
 /// The check installed during a call: runs Python's signal handlers every 50 ms (from the main
 /// thread, which runs the loops; PyErr_CheckSignals does nothing on other threads).
 bool python_signal_pending() {
+  if (pending_error) return true;
   using Clock = std::chrono::steady_clock;
   static Clock::time_point last;
   const Clock::time_point now = Clock::now();
@@ -118,7 +125,7 @@ bool python_signal_pending() {
 /// Installs the check for its lifetime.
 class InterruptScope {
  public:
-  InterruptScope() : previous_(set_interrupt_check(&python_signal_pending)) { pending_error.reset(); }
+  InterruptScope() : previous_(set_interrupt_check(&python_signal_pending)) {}
   ~InterruptScope() { set_interrupt_check(previous_); }
   InterruptScope(const InterruptScope&) = delete;
   InterruptScope& operator=(const InterruptScope&) = delete;
@@ -131,20 +138,27 @@ class InterruptScope {
 /// a KeyboardInterrupt stopping it; the Python error of an interruption is raised again here.
 template <class Body>
 auto call_library(const py::object& sink, Body&& body) {
+  pending_error.reset();
   LineBuffer buffer(sink);
   std::ostream out(&buffer);
   const CerrRedirect redirect(&buffer);
   const InterruptScope scope;
-  try {
-    const py::gil_scoped_release release;
-    return body(out);
-  } catch (const Interrupted&) {
+  const auto raise_pending = [&]() {
     buffer.emit();
-    if (pending_error) {
-      py::error_already_set error = std::move(*pending_error);
-      pending_error.reset();
-      throw error;
-    }
+    if (!pending_error) return;
+    py::error_already_set error = std::move(*pending_error);
+    pending_error.reset();
+    throw error;
+  };
+  try {
+    auto value = [&]() {
+      const py::gil_scoped_release release;
+      return body(out);
+    }();
+    raise_pending();  // interrupted after the last poll (in a callback): the result is dropped
+    return value;
+  } catch (const Interrupted&) {
+    raise_pending();
     throw;
   }
 }

@@ -22,7 +22,7 @@ from . import _crackle
 
 def private_folder():
     """A new private folder (removed by the result that keeps it, or on failure)."""
-    return tempfile.mkdtemp(prefix="crackle-")
+    return tempfile.mkdtemp(prefix="crackle-result-")
 
 
 @contextlib.contextmanager
