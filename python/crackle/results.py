@@ -231,7 +231,8 @@ class RunResult(Result):
     """``crackle run``: ``probes[name]`` with ``time`` (n,) [s] and ``u``, ``v``, ``a`` (n, 3) in m,
     m/s, m/s^2 (a crack-opening probe: ``gap``, ``slip_1``, ... (n,)), ``units`` per quantity;
     ``energy`` (energy.csv, {column: (n_rows,)} in J); ``spectrum`` (spectrum.json as a dict, None
-    without a spectrum) and ``harmonics[probe]`` its harmonic table; ``modal`` the modal stage's
+    without a spectrum) and ``harmonics[probe]`` its harmonic table (``order`` (n_orders,), halves
+    for sub-harmonics, ``frequency_hz``, ``amplitude`` [m], ``phase_rad``); ``modal`` the modal stage's
     modal.json (None when it did not run); ``json`` is run.json."""
 
     main_document = "run.json"
@@ -244,12 +245,9 @@ class RunResult(Result):
         self.modal = self.documents.get("modal.json")
         self.transient = self.documents.get("transient.json")
         self.harmonics = {}
-        for probe in (self.spectrum or {}).get("probes", []) if isinstance(self.spectrum, dict) else []:
-            if isinstance(probe, dict) and "name" in probe:
-                self.harmonics[probe["name"]] = {
-                    key: np.asarray(value) for key, value in probe.items()
-                    if isinstance(value, list) and value and all(isinstance(v, (int, float)) for v in value)
-                }
+        for probe, entry in ((self.spectrum or {}).get("probes") or {}).items():
+            rows = entry.get("harmonics", [])
+            self.harmonics[probe] = {key: np.array([row[key] for row in rows]) for key in (rows[0] if rows else {})}
 
 
 class SweepResult(Result):

@@ -58,6 +58,10 @@ def test_run_and_sweep_arrays():
     assert tip["units"] == {"time": "s", "u": "m", "v": "m/s", "a": "m/s^2"}
     assert (np.diff(tip["time"]) > 0).all()
     assert run.json["stages"] and run.spectrum is not None
+    harmonics = run.harmonics["tip"]
+    orders = harmonics["order"].shape[0]
+    assert orders > 3 and harmonics["amplitude"].shape == (orders,) and harmonics["order"][0] == 0
+    assert np.allclose(harmonics["frequency_hz"], harmonics["order"] * run.json["excitation_hz"])
     curve = crackle.sweep(scene, quiet=True)
     points = curve.frequency_hz.shape[0]
     assert points >= 20 and (curve.frequency_hz > 0).all()
@@ -84,3 +88,25 @@ def test_progress_goes_to_the_callback():
 def test_set_threads():
     crackle.set_threads(1)
     assert crackle.threads() == 1
+
+
+def test_solves_release_the_gil():
+    import threading
+    import time
+
+    ticks, done = [], threading.Event()
+
+    def count():
+        while not done.is_set():
+            ticks.append(1)
+            time.sleep(0.001)
+
+    thread = threading.Thread(target=count)
+    thread.start()
+    start = time.monotonic()
+    crackle.modal(small_beam())
+    elapsed = time.monotonic() - start
+    done.set()
+    thread.join()
+    # Python ran the other thread all along (about one tick a millisecond, far fewer if it waited).
+    assert len(ticks) > 0.1 * elapsed / 0.001
