@@ -9,6 +9,8 @@ packages=(
   libeigen3-dev libpetsc-real-dev libptscotch-dev libslepc-real-dev libarpack2-dev libfftw3-dev
   libsuitesparse-dev libceres-dev libyaml-cpp-dev libgtest-dev libcli11-dev nlohmann-json3-dev
   libopenblas0-pthread openmpi-bin gnuplot-nox
+  pybind11-dev pybind11-json-dev python3-dev python3-numpy python3-pytest python3-matplotlib
+  python3-petsc4py-real
 )
 missing=()
 for package in "${packages[@]}"; do

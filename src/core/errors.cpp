@@ -1,5 +1,7 @@
 #include "core/errors.hpp"
 
+#include "core/interrupt.hpp"
+
 #include <charconv>
 #include <cstdio>
 #include <cstdlib>
@@ -9,6 +11,7 @@
 namespace crackle {
 
 int exit_code_for(const std::exception& error) {
+  if (dynamic_cast<const Interrupted*>(&error)) return 130;
   if (dynamic_cast<const InputError*>(&error)) return 2;
   if (dynamic_cast<const SolverError*>(&error)) return 3;
   if (dynamic_cast<const IoError*>(&error)) return 4;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/errors.hpp"
+#include "core/interrupt.hpp"
 #include "core/resources.hpp"
 #include "modal/cholmod_factor.hpp"
 #include "modal/eigensolver.hpp"
@@ -22,6 +23,8 @@ void dseupd_c(int rvec, char const* howmny, int const* select, double* d, double
               double sigma, char const* bmat, int n, char const* which, int nev, double tol,
               double* resid, int ncv, double* v, int ldv, int* iparam, int* ipntr, double* workd,
               double* workl, int lworkl, int* info);
+// LAPACK's random vector (ARPACK's dependency), for ARPACK's own start vector.
+void dlarnv_(const int* idist, int* iseed, const int* n, double* x);
 }
 
 namespace crackle::modal {
@@ -103,12 +106,19 @@ EigenPairs solve_eigenpairs_arpack(const SparseMatrix& stiffness, const SparseMa
   iparam[3] = 1;
   iparam[6] = 3;  // mode 3: shift-invert, OP = (K - sigma M)^{-1} M, B = M
   int ido = 0;
-  int info = 0;  // random initial vector (ARPACK's fixed seed: deterministic)
+  // The random start ARPACK makes on its first call in a process (dgetv0: dlarnv, uniform on
+  // (-1, 1), seed 1, 3, 5, 7), made here for every solve: ARPACK keeps its seed between calls, so
+  // that a second solve in the same process (the Python module, a test) would start elsewhere.
+  const int distribution = 2;
+  int seed[4] = {1, 3, 5, 7};
+  dlarnv_(&distribution, seed, &n, resid.data());
+  int info = 1;  // start from resid
   const char* which = "LM";
   for (;;) {
     dsaupd_c(&ido, "G", n, which, nev, options.tolerance, resid.data(), ncv, basis.data(), n,
              iparam, ipntr, workd.data(), workl.data(), lworkl, &info);
     if (ido == 99) break;
+    poll_interrupt();  // one Lanczos step: a solve with the factor
     double* x = workd.data() + ipntr[0] - 1;
     double* y = workd.data() + ipntr[1] - 1;
     if (ido == -1) {  // y = OP x = (K - sigma M)^{-1} M x

@@ -1,6 +1,7 @@
 #pragma once
 /// \file The subcommands of the `crackle` executable, callable from tests.
 #include <filesystem>
+#include <functional>
 #include <iosfwd>
 #include <string>
 #include <vector>
@@ -9,6 +10,8 @@
 #include "scene/scene.hpp"
 
 namespace crackle::pipeline {
+
+struct Model;
 
 /// `--set key.path=value` arguments: scene overrides (validated like the file's own values).
 std::vector<scene::Override> parse_overrides(const std::vector<std::string>& assignments);
@@ -52,6 +55,9 @@ modal::ModalOptions modal_options(const scene::ModalSection& section);
 /// `crackle modal`: eigenmodes of the uncracked and open-crack body; writes modal.json,
 /// modes.csv and the mode shapes (VTU) into the output directory, prints the pairing table.
 /// Needs SLEPc initialised (modal::SlepcSession). Under MPI only rank 0 writes and prints.
-void run_modal_command(const ModalCommandOptions& options, std::ostream& out);
+/// `inspect`, when given, sees the model and the result once the files are written (the Python
+/// module takes its arrays from them).
+using ModalInspect = std::function<void(const Model& model, const modal::ModalResult& result)>;
+void run_modal_command(const ModalCommandOptions& options, std::ostream& out, const ModalInspect& inspect = {});
 
 }  // namespace crackle::pipeline

@@ -23,7 +23,7 @@ modal::ModalOptions modal_options(const scene::ModalSection& section) {
   return options;
 }
 
-void run_modal_command(const ModalCommandOptions& options, std::ostream& out) {
+void run_modal_command(const ModalCommandOptions& options, std::ostream& out, const ModalInspect& inspect) {
   const scene::Scene scene = scene::load_scene(options.scene_path, parse_overrides(options.overrides));
   scene::ModalSection section = scene.modal;
   if (options.modes > 0) section.modes = options.modes;
@@ -43,6 +43,7 @@ void run_modal_command(const ModalCommandOptions& options, std::ostream& out) {
     modal::write_modal_outputs(options.output_directory, model.mesh, result);
     folder->finish("done");
     out << modal::modal_table(result);
+    if (inspect) inspect(model, result);
   } catch (...) {
     try {
       if (folder) folder->finish("failed");

@@ -11,6 +11,7 @@
 #include "pipeline/commands.hpp"
 #include "pipeline/distributed_run.hpp"
 #include "core/errors.hpp"
+#include "core/interrupt.hpp"
 #include "core/resources.hpp"
 #include "io/csv.hpp"
 #include "io/files.hpp"
@@ -956,6 +957,7 @@ void march_reduced(reduced::ReducedIntegrator& integrator, ReducedModel& reduced
   const VectorX empty;
   double closed = 0.0;
   for (Index i = 0; i < n_steps; ++i) {
+    if ((i & 63) == 63) poll_interrupt();
     reduced_sample(integrator, reduced, dt, records);
     if (i % kEnergyInterval == 0) reduced_energy_row(integrator, initial_total, records);
     const double time = integrator.time();

@@ -14,6 +14,7 @@
 #include <Eigen/SVD>
 
 #include "core/errors.hpp"
+#include "core/interrupt.hpp"
 #include "core/resources.hpp"
 #include "reduced/integrator.hpp"
 
@@ -143,6 +144,7 @@ SweepPoint stepped_sine_point(const reduced::ReducedSystem& system, const SweepS
   MatrixX samples(system.n_outputs(), n);
   sweep::ComplexMatrixX before;
   for (point.periods = 1; point.periods <= section.max_periods; ++point.periods) {
+    poll_interrupt();
     for (Index j = 0; j < n; ++j) {
       samples.col(j) = integrator.outputs();
       integrator.step();

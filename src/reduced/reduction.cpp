@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 
 #include "core/errors.hpp"
+#include "core/interrupt.hpp"
 #include "core/resources.hpp"
 #include "io/files.hpp"
 #include "modal/cache.hpp"
@@ -281,6 +282,7 @@ Reduction compute_reduction(const fem::System& system, const ReductionOptions& o
   reduction.pair_static.resize(c, c);
   reduction.output_static.resize(o, c);
   for (Index first = 0; first < c; first += kSolveBlock) {
+    poll_interrupt();
     const Index columns = std::min<Index>(kSolveBlock, c - first);
     MatrixX block = MatrixX::Zero(n_free, columns);
     for (Index k = 0; k < columns; ++k) {

@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "core/errors.hpp"
+#include "core/interrupt.hpp"
 #include "sweep/harmonic_balance.hpp"
 
 namespace crackle::sweep {
@@ -114,6 +115,7 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
 
   std::vector<BranchPoint> branch;
   auto add_point = [&](Solution&& sol, double tangent_omega) {
+    poll_interrupt();
     BranchPoint point;
     point.solution = std::move(sol);
     point.tangent_omega = tangent_omega;

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
+#include "core/interrupt.hpp"
 #include "core/resources.hpp"
 #include "io/csv.hpp"
 #include "io/files.hpp"
@@ -691,6 +692,7 @@ void TransientSolver::Impl::integrate(const TransientCallbacks& callbacks) {
         break;
       }
     }
+    if (!distribution && (i & 63) == 63) poll_interrupt();
     if (o.progress && (!distribution || distribution->rank() == 0) && (i & 63) == 63 && wall.seconds() - last_progress >= o.progress_interval) {
       last_progress = wall.seconds();
       progress_line(i, last_progress, callbacks.progress_note ? callbacks.progress_note(last_progress) : "");
