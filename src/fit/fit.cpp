@@ -131,6 +131,15 @@ Eigen::RowVectorXd spline_at(const std::vector<double>& x, const MatrixX& y, dou
 
 }  // namespace
 
+std::vector<bool> at_bounds(const VectorX& theta, const Bounds& bounds) {
+  std::vector<bool> at;
+  for (Eigen::Index j = 0; j < theta.size(); ++j) {
+    const double margin = 1e-6 * (bounds.upper[j] - bounds.lower[j]);
+    at.push_back(theta[j] <= bounds.lower[j] + margin || theta[j] >= bounds.upper[j] - margin);
+  }
+  return at;
+}
+
 std::vector<VectorX> jacobian_points(const VectorX& theta, const Bounds& bounds, const VectorX& steps) {
   std::vector<VectorX> points;
   for (Eigen::Index j = 0; j < theta.size(); ++j) {
@@ -193,10 +202,7 @@ FitResult fit_bounded(const BatchResiduals& residuals, const VectorX& start, con
   result.iterations = static_cast<int>(summary.iterations.size());
   result.converged = summary.termination_type == ceres::CONVERGENCE;
   result.message = summary.message;
-  for (Eigen::Index j = 0; j < k; ++j) {
-    const double margin = 1e-6 * (bounds.upper[j] - bounds.lower[j]);
-    result.at_bound.push_back(theta[j] <= bounds.lower[j] + margin || theta[j] >= bounds.upper[j] - margin);
-  }
+  result.at_bound = at_bounds(theta, bounds);
   return result;
 }
 

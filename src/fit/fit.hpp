@@ -46,8 +46,11 @@ struct FitResult {
   int evaluations = 0;  ///< residual evaluations (each a forward run per parameter vector)
   bool converged = false;
   std::string message;  ///< the solver's own summary line
-  std::vector<bool> at_bound;  ///< per unknown: within 1e-6 of its width of a bound
+  std::vector<bool> at_bound;  ///< per unknown: within 1e-6 of its width of a bound (at_bounds)
 };
+
+/// Per unknown: theta within 1e-6 of its width of a bound.
+std::vector<bool> at_bounds(const VectorX& theta, const Bounds& bounds);
 
 /// The k points of a finite-difference Jacobian at theta: theta + h_j e_j, h_j = steps_j (upper_j -
 /// lower_j), negated where that would leave the bounds (so a caller can evaluate them ahead).

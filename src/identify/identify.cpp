@@ -910,10 +910,7 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
         result.jacobian = j0;
         result.chi2 = r0.squaredNorm();
         result.converged = true;
-        for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(k); ++j) {
-          const double margin = 1e-6 * (bounds.upper[j] - bounds.lower[j]);
-          result.at_bound.push_back(theta[j] <= bounds.lower[j] + margin || theta[j] >= bounds.upper[j] - margin);
-        }
+        result.at_bound = fit::at_bounds(theta, bounds);
       } else {
         theta += moved;
       }
