@@ -121,88 +121,6 @@ Measurement measurement_from(const YAML::Node& node, const std::string& file, co
   return m;
 }
 
-std::vector<std::string> split_csv(const std::string& line) {
-  std::vector<std::string> cells;
-  std::string cell;
-  for (char c : line) {
-    if (c == ',') {
-      cells.push_back(cell);
-      cell.clear();
-    } else if (c != '\r') {
-      cell += c;
-    }
-  }
-  cells.push_back(cell);
-  for (std::string& text : cells) {
-    const auto first = text.find_first_not_of(" \t"), last = text.find_last_not_of(" \t");
-    text = first == std::string::npos ? "" : text.substr(first, last - first + 1);
-  }
-  return cells;
-}
-
-/// The value of a dotted key path in a document (map keys only), or an undefined node.
-YAML::Node node_at(const YAML::Node& document, const std::string& path) {
-  YAML::Node node = YAML::Clone(document);
-  std::stringstream stream(path);
-  std::string key;
-  while (std::getline(stream, key, '.')) {
-    if (!node.IsMap() || !node[key]) return YAML::Node(YAML::NodeType::Undefined);
-    node = node[key];
-  }
-  return node;
-}
-
-int uniform_index(double at, double origin, double size, int cells) {
-  return static_cast<int>(std::lround((at - origin) / size * cells));
-}
-
-/// Rows of a sweep.csv: the excitation frequency and the named columns.
-struct SweepTable {
-  std::vector<std::string> header;
-  std::vector<std::vector<double>> rows;
-};
-
-SweepTable read_sweep_csv(const fs::path& path) {
-  std::ifstream file(path);
-  if (!file) throw SolverError("identify: no " + path.string());
-  SweepTable table;
-  std::string line;
-  if (std::getline(file, line)) table.header = split_csv(line);
-  while (std::getline(file, line)) {
-    if (line.empty()) continue;
-    std::vector<double> row;
-    for (const std::string& cell : split_csv(line)) {
-      double value = kNaN;
-      scene::parse_number(cell, value);
-      row.push_back(value);
-    }
-    table.rows.push_back(row);
-  }
-  return table;
-}
-
-/// A harmonic quantity of a probe at the drive frequency, linearly interpolated between the two
-/// sweep points around it (the sweep is a narrow range about it: the points lie 1e-4 apart).
-double sweep_value(const SweepTable& table, const Measurement& m) {
-  const std::string column = m.quantity == "A1" ? "A1 [m]" : m.quantity + " [-]";
-  const std::string prefix = m.probe + " u_";
-  std::size_t index = table.header.size();
-  for (std::size_t c = 0; c < table.header.size(); ++c) {
-    const std::string& name = table.header[c];
-    if (name.rfind(prefix, 0) == 0 && name.size() >= column.size() &&
-        name.compare(name.size() - column.size(), column.size(), column) == 0 && name.size() == prefix.size() + 2 + column.size())
-      index = c;
-  }
-  if (index == table.header.size()) return kNaN;
-  for (std::size_t r = 0; r + 1 < table.rows.size(); ++r) {
-    const double f0 = table.rows[r][0], f1 = table.rows[r + 1][0];
-    if ((f0 - m.drive_hz) * (f1 - m.drive_hz) > 0.0 || f0 == f1) continue;
-    const double w = (m.drive_hz - f0) / (f1 - f0);
-    return (1.0 - w) * table.rows[r][index] + w * table.rows[r + 1][index];
-  }
-  return kNaN;
-}
-
 /// Half-width of the sweep about a drive frequency, relative.
 constexpr double kSweepHalfWidth = 1e-4;
 
@@ -250,7 +168,7 @@ class Forward {
         if (!is_frequency(measurement.quantity)) {
           const std::size_t d = static_cast<std::size_t>(
               std::lower_bound(drives_.begin(), drives_.end(), measurement.drive_hz) - drives_.begin());
-          value = sweep_value(sweeps[t][d], measurement);
+          value = sweep_value(sweeps[t][d], measurement.quantity, measurement.probe, measurement.drive_hz);
         } else {
           const json& pairs = modal[t]["pairs"];
           if (static_cast<std::size_t>(measurement.mode) <= pairs.size()) {
@@ -275,7 +193,6 @@ class Forward {
   /// the case folders in order (theta-major). SolverError names a case that failed.
   std::vector<fs::path> run_cases(const std::vector<VectorX>& thetas, const std::vector<double>& drives,
                                   const std::vector<int>& orders, const fs::path& folder, bool progress) {
-    const std::size_t per_theta = std::max<std::size_t>(1, drives.size());
     YAML::Node document = YAML::Clone(base_);
     if (!drives.empty()) {
       // The sweep of each case: its range is set per case; no stability (amplitudes only).
@@ -288,80 +205,20 @@ class Forward {
       if (sweep["subharmonic"]) sweep.remove("subharmonic");
       document["sweep"] = sweep;
     }
-    YAML::Node vary(YAML::NodeType::Map);
-    std::map<std::string, std::vector<std::string>> values;
-    for (const VectorX& theta : thetas) {
-      std::map<std::string, YAML::Node> lists;
-      std::vector<std::pair<std::string, std::string>> entries_of_theta;
-      for (std::size_t j = 0; j < spec_.unknowns.size(); ++j) {
-        const Unknown& u = spec_.unknowns[j];
-        if (u.index < 0) {
-          entries_of_theta.emplace_back(u.path, format_number(theta[static_cast<Eigen::Index>(j)]));
-          continue;
-        }
-        if (!lists.count(u.path)) lists[u.path] = YAML::Clone(node_at(base_, u.path));
-        lists[u.path][static_cast<std::size_t>(u.index)] = format_number(theta[static_cast<Eigen::Index>(j)]);
-      }
-      for (auto& [path, list] : lists) {
-        std::vector<std::string> entries;
-        for (const auto& item : list) entries.push_back(item.Scalar());
-        entries_of_theta.emplace_back(path, "[" + join(entries) + "]");
-      }
-      for (std::size_t d = 0; d < per_theta; ++d) {
-        for (const auto& [path, text] : entries_of_theta) values[path].push_back(text);
-        if (!drives.empty()) {
-          values["sweep.frequency.from"].push_back(format_number(drives[d] * (1.0 - kSweepHalfWidth)));
-          values["sweep.frequency.to"].push_back(format_number(drives[d] * (1.0 + kSweepHalfWidth)));
-        }
+    std::vector<ForwardCase> cases;
+    for (std::size_t t = 0; t < thetas.size(); ++t) {
+      ForwardCase run{thetas[t], orders.empty() ? 0 : orders[t], {}};
+      if (drives.empty()) cases.push_back(run);
+      for (double drive : drives) {
+        run.set = {{"sweep.frequency.from", format_number(drive * (1.0 - kSweepHalfWidth))},
+                   {"sweep.frequency.to", format_number(drive * (1.0 + kSweepHalfWidth))}};
+        cases.push_back(run);
       }
     }
-    for (const auto& [path, list] : values) {
-      YAML::Node seq(YAML::NodeType::Sequence);
-      for (const std::string& text : list) seq.push_back(YAML::Load(text));
-      vary[path] = seq;
-    }
-    if (!orders.empty()) {
-      YAML::Node seq(YAML::NodeType::Sequence);
-      for (int order : orders)
-        for (std::size_t d = 0; d < per_theta; ++d) seq.push_back(order);
-      vary["mesh.box.order"] = seq;
-    }
-    document["study"]["vary"] = vary;
-    document["study"]["mode"] = "zip";
-    document["study"]["outputs"] = std::vector<std::string>{drives.empty() ? "modal" : "sweep"};
-    fs::create_directories(folder);
-    YAML::Emitter out;
-    out << document;
-    const fs::path scene_path = folder / "forward.yaml";
-    io::write_file_atomic(scene_path, std::string(out.c_str()) + "\n");
-    study::StudyOptions study;
-    study.scene_path = scene_path.string();
-    study.output_dir = (folder / "runs").string();
-    study.executable = options_.executable;
-    study.jobs = options_.jobs;
-    study.modal_cache = false;  // every case has its own (moved) mesh
-    study.gnuplot = "";
-    std::ostringstream quiet;
-    const int code = study::run_study(study, progress ? log_ : quiet);
-    if (code == 130) throw SolverError("identify: interrupted");
-    std::vector<fs::path> cases;
-    const std::string wanted = drives.empty() ? "modal.json" : "sweep.csv";
-    for (std::size_t c = 0; c < thetas.size() * per_theta; ++c) {
-      const fs::path case_dir = folder / "runs" / study::case_folder(static_cast<int>(c));
-      if (!fs::exists(case_dir / wanted)) {
-        std::string error = "no " + wanted;
-        try {
-          std::ifstream record(case_dir / "case.json");
-          const json value = json::parse(record);
-          if (value.contains("error")) error = value["error"].get<std::string>();
-        } catch (const std::exception&) {
-        }
-        throw SolverError("identify: forward run " + case_dir.string() + " failed: " + error);
-      }
-      cases.push_back(case_dir);
-    }
-    runs_ += static_cast<int>(cases.size());
-    return cases;
+    const std::vector<fs::path> folders = run_forward_cases(document, spec_.unknowns, cases, drives.empty() ? "modal" : "sweep",
+                                                            folder, {options_.executable, options_.jobs}, log_, progress);
+    runs_ += static_cast<int>(folders.size());
+    return folders;
   }
 
   const IdentifySpec& spec_;
@@ -520,7 +377,7 @@ std::vector<Measurement> read_measurements_csv(const std::string& path) {
   while (std::getline(file, line)) {
     ++number;
     if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
-    const std::vector<std::string> cells = split_csv(line);
+    const std::vector<std::string> cells = split_csv_line(line);
     if (!have_header) {
       if (cells != header) {
         throw InputError(path + ":" + std::to_string(number) + ": expected the header " + join(header, ",") +
@@ -580,40 +437,7 @@ IdentifySpec parse_identify_section(const std::string& text, const std::string& 
       fail(file, scene::mark_line(entry.first), "identify." + key, "one of " + join(keys),
            "unknown key '" + key + "'" + scene::suggestion(key, keys));
   }
-  // unknowns
-  const YAML::Node unknowns = section["unknowns"];
-  if (!unknowns || !unknowns.IsMap() || unknowns.size() == 0)
-    fail(file, spec.line, "identify.unknowns", "a map of scene key paths to [low, high] bounds",
-         unknowns ? scene::describe_node(unknowns) : "nothing");
-  for (const auto& entry : unknowns) {
-    Unknown u;
-    u.key = entry.first.Scalar();
-    u.line = scene::mark_line(entry.first);
-    const std::string where_path = "identify.unknowns." + u.key;
-    u.path = u.key;
-    const auto bracket = u.key.find('[');
-    if (bracket != std::string::npos && u.key.back() == ']') {
-      u.path = u.key.substr(0, bracket);
-      double index = kNaN;
-      if (!scene::parse_number(u.key.substr(bracket + 1, u.key.size() - bracket - 2), index) || index < 0 ||
-          index != std::floor(index))
-        fail(file, u.line, where_path, "a key path with a list index as [0]", "'" + u.key + "'");
-      u.index = static_cast<int>(index);
-    }
-    if (const std::string problem = study::check_key_path(u.path); !problem.empty())
-      throw InputError(file + ":" + std::to_string(u.line) + ": " + where_path + ": " + problem);
-    if (study::key_unit(u.path).empty())
-      fail(file, u.line, where_path, "a numeric scene key", "'" + u.path + "' (not a number)");
-    const YAML::Node bounds = entry.second;
-    if (!bounds.IsSequence() || bounds.size() != 2)
-      fail(file, u.line, where_path, "bounds [low, high]", scene::describe_node(bounds));
-    u.lower = number_of(bounds[0], file, where_path + "[0]");
-    u.upper = number_of(bounds[1], file, where_path + "[1]");
-    if (!(u.upper > u.lower)) fail(file, u.line, where_path, "bounds [low, high] with low < high", format_number(u.lower) + ", " + format_number(u.upper));
-    for (const Unknown& other : spec.unknowns)
-      if (other.key == u.key) fail(file, u.line, where_path, "each unknown once", "'" + u.key + "' again");
-    spec.unknowns.push_back(u);
-  }
+  spec.unknowns = parse_unknowns(section["unknowns"], file, "identify.unknowns", spec.line);
   // measured
   const YAML::Node measured = section["measured"];
   if (!measured) fail(file, spec.line, "identify.measured", "a list of measurements or the path of a CSV file", "nothing");
@@ -675,9 +499,6 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
   const std::size_t k = spec.unknowns.size(), n = spec.measured.size();
 
   // ---- checks against the scene
-  if (!scene.crack || !scene.gmsh_file.empty())
-    throw InputError(file + ": identify: expected a box mesh with a crack (crack.plane and crack.region), got " +
-                     (scene.gmsh_file.empty() ? "no crack" : "a Gmsh mesh (its crack cannot be moved)"));
   for (const Measurement& m : spec.measured) {
     if (!is_frequency(m.quantity)) {
       bool found = false;
@@ -699,42 +520,8 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
   YAML::Node base = scene::parse_yaml(text, file);
   base.remove("identify");
   base.remove("study");
-  for (const Unknown& u : spec.unknowns) {
-    const YAML::Node value = node_at(base, u.path);
-    if (u.index >= 0 && (!value.IsSequence() || static_cast<int>(value.size()) <= u.index))
-      throw InputError(file + ":" + std::to_string(u.line) + ": identify.unknowns." + u.key +
-                       ": expected an entry of a list the scene gives at " + u.path + ", got " +
-                       (value.IsDefined() ? scene::describe_node(value) : "nothing"));
-    if (u.index < 0 && value.IsSequence())
-      throw InputError(file + ":" + std::to_string(u.line) + ": identify.unknowns." + u.key + ": expected one entry (" +
-                       u.path + "[0]), got the whole list");
-  }
-
-  // ---- the reference crack: the middle of the bounds (its plane on the nearest uniform grid plane)
-  mesh::CrackSpec reference = *scene.crack;
-  for (const Unknown& u : spec.unknowns) {
-    const double middle = 0.5 * (u.lower + u.upper);
-    if (u.path == "crack.plane.at") {
-      const int axis = reference.normal;
-      const int cells = scene.box.cells[axis];
-      const int line = std::clamp(uniform_index(middle, scene.box.origin[axis], scene.box.size[axis], cells), 1, cells - 1);
-      reference.at = scene.box.origin[axis] + scene.box.size[axis] * line / cells;
-    }
-    for (int axis = 0; axis < 3; ++axis)
-      if (u.path == std::string("crack.region.") + "xyz"[axis] && u.index >= 0 && u.index < 2)
-        reference.region[axis][static_cast<std::size_t>(u.index)] = middle;
-  }
-  YAML::Node ref(YAML::NodeType::Map);
-  ref["at"] = format_number(reference.at);
-  for (int axis = 0; axis < 3; ++axis) {
-    if (axis == reference.normal) continue;
-    YAML::Node range(YAML::NodeType::Sequence);
-    range.push_back(format_number(reference.region[axis][0]));
-    range.push_back(format_number(reference.region[axis][1]));
-    range.SetStyle(YAML::EmitterStyle::Flow);
-    ref["region"][std::string(1, "xyz"[axis])] = range;
-  }
-  base["crack"]["reference"] = ref;
+  // the reference crack: the middle of the bounds (its plane on the nearest uniform grid plane)
+  prepare_base(base, scene, spec.unknowns, file, "identify.unknowns");
 
   // A rerun into the same folder resumes: the forward runs are study cases, cached by their scenes.
   const fs::path dir(options.output_dir);
@@ -1001,7 +788,7 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
   document["dof"] = static_cast<int>(n) - static_cast<int>(k);
   document["sigma"] = spec.scale_by_fit ? "scaled" : "trusted";
   document["t_quantile"] = best.uncertainty.t;
-  document["reference_crack"] = {{"at", reference.at}};
+  document["reference_crack"] = {{"at", std::stod(base["crack"]["reference"]["at"].Scalar())}};
   document["map"] = {{"points_per_unknown", spec.map_points}, {"runs", map_runs}, {"folder", map_dir.string()},
                      {"best_chi2", best_map}, {"minima_kept", starts.size()}};
   if (!spec.truth.empty()) {

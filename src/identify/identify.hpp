@@ -38,16 +38,9 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-namespace crackle::identify {
+#include "identify/forward.hpp"
 
-/// One unknown: a scene key (path, or a list entry path[index]) and its bounds.
-struct Unknown {
-  std::string key;   ///< as written: crack.region.z[0]
-  std::string path;  ///< the scene key: crack.region.z
-  int index = -1;    ///< list entry, or -1 for a scalar key
-  double lower = 0.0, upper = 0.0;
-  int line = -1;
-};
+namespace crackle::identify {
 
 /// One measurement (a row of the measured list or CSV file).
 struct Measurement {
