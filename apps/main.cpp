@@ -20,6 +20,7 @@
 #include "scene/yaml_text.hpp"
 #include "study/plan.hpp"
 #include "identify/identify.hpp"
+#include "planning/planning.hpp"
 #include "study/study.hpp"
 
 namespace {
@@ -283,17 +284,29 @@ int main(int argc, char** argv) {
   identify_command->add_option("--map-cache", identify_options.map_cache,
                                "Folder of the map's forward runs, kept for the next measurement set of the same design");
 
+  planning::PlanOptions plan_options;
+  plan_options.executable = "/proc/self/exe";
+  CLI::App* plan_command = cli.add_subcommand(
+      "plan", "Test planning: which sensor, drive point and drive frequency of the scene's plan: section detect and "
+              "locate the cracks of its prior (Fisher information, detectability, existence of the sub-harmonic); "
+              "writes plan.json, plan_sensors.vtu and plan_log_det.png. The forward runs are study cases (parallel, "
+              "resumable)");
+  plan_command->add_option("scene", plan_options.scene_path, "Scene file (YAML) with a plan: section")->required();
+  plan_command->add_option("-o,--output", plan_options.output_dir, "Output directory")->required();
+  plan_command->add_option("-j,--jobs", plan_options.jobs, "Forward runs at a time (default: the cores)")
+      ->check(above(0, true, "a positive integer"));
+
   CLI::App* format_command =
       cli.add_subcommand("scene-format", "Print the reference of every scene key (Markdown)");
   for (CLI::App* command :
-       {check_command, modal_command, run_command, sweep_command, study_command, identify_command, format_command})
+       {check_command, modal_command, run_command, sweep_command, study_command, identify_command, plan_command, format_command})
     command->allow_extras();
 
   // Crackle's own arguments before `--`, PETSc's after it.
   SplitArguments arguments = split_arguments(argc, argv);
   std::vector<std::string> commands;
   for (const CLI::App* command :
-       {check_command, modal_command, run_command, sweep_command, study_command, identify_command, format_command})
+       {check_command, modal_command, run_command, sweep_command, study_command, identify_command, plan_command, format_command})
     commands.push_back(command->get_name());
   if (arguments.own.size() > 1 && arguments.own[1][0] != '-' &&
       std::find(commands.begin(), commands.end(), arguments.own[1]) == commands.end()) {
@@ -362,6 +375,7 @@ int main(int argc, char** argv) {
       return study::run_study(study_options, std::cerr);
     }
     if (*identify_command) identify::run_identify(identify_options, std::cerr);
+    if (*plan_command) planning::run_plan(plan_options, std::cerr);
     if (*format_command) std::cout << scene::scene_format_markdown();
   } catch (const std::bad_alloc&) {
     if (quiet_rank) return kExitOutOfMemory;

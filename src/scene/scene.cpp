@@ -968,6 +968,8 @@ Scene parse_scene(const std::string& text, const std::string& name, const std::v
   if (document.IsMap() && document["study"]) document.remove("study");
   // `identify:` likewise belongs to `crackle identify` (src/identify).
   if (document.IsMap() && document["identify"]) document.remove("identify");
+  // `plan:` belongs to `crackle plan` (src/planning).
+  if (document.IsMap() && document["plan"]) document.remove("plan");
   for (const Override& change : overrides) apply_override(document, change.path, change.value, name);
   return scene_from(validate(scene_parameters(), document, name));
 }
