@@ -60,7 +60,7 @@ TEST(CliEdges, BadCommandLinesGiveOneLineAndExitCode2) {
       {"check " + beam + " other.yaml",
        "crackle check: unexpected argument 'other.yaml' (it takes one scene file); see crackle check --help"},
       {"chekc " + beam,
-       "unknown command 'chekc' (did you mean 'check'?) (commands: check, modal, run, sweep, study, identify, scene-format); see "
+       "unknown command 'chekc' (did you mean 'check'?) (commands: check, modal, run, sweep, study, identify, plan, scene-format); see "
        "crackle --help"},
       // values out of range
       {"modal " + beam + " --modes -1",
