@@ -26,24 +26,35 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-std::string join(const std::vector<std::string>& words, const std::string& separator = ", ") {
-  std::string text;
-  for (std::size_t i = 0; i < words.size(); ++i) text += (i ? separator : "") + words[i];
-  return text;
-}
-
-double number_of(const YAML::Node& node, const std::string& file, const std::string& path) {
-  double value = kNaN;
-  if (!node.IsScalar() || !scene::parse_number(node.Scalar(), value) || !std::isfinite(value))
-    scene::fail(file, scene::mark_line(node), path, "a finite number", scene::describe_node(node));
-  return value;
-}
-
 int uniform_index(double at, double origin, double size, int cells) {
   return static_cast<int>(std::lround((at - origin) / size * cells));
 }
 
 }  // namespace
+
+std::string join(const std::vector<std::string>& words, const std::string& separator) {
+  std::string text;
+  for (std::size_t i = 0; i < words.size(); ++i) text += (i ? separator : "") + words[i];
+  return text;
+}
+
+double number_of(const YAML::Node& node, const std::string& file, const std::string& path, bool integer) {
+  double value = kNaN;
+  if (!node.IsScalar() || !scene::parse_number(node.Scalar(), value) || !std::isfinite(value) ||
+      (integer && value != std::floor(value)))
+    scene::fail(file, scene::mark_line(node), path, integer ? "an integer" : "a finite number", scene::describe_node(node));
+  return value;
+}
+
+void only_keys(const YAML::Node& map, const std::vector<std::string>& keys, const std::string& file,
+               const std::string& path) {
+  for (const auto& entry : map) {
+    const std::string key = entry.first.Scalar();
+    if (std::find(keys.begin(), keys.end(), key) == keys.end())
+      scene::fail(file, scene::mark_line(entry.first), path + "." + key, "one of " + join(keys),
+                  "unknown key '" + key + "'" + scene::suggestion(key, keys));
+  }
+}
 
 std::vector<std::string> split_csv_line(const std::string& line) {
   // RFC 4180: a quoted cell may hold commas ("stable [1 yes, 0 no, -1 not computed]"), "" is a quote.

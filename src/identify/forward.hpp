@@ -19,6 +19,14 @@ struct Scene;
 
 namespace crackle::identify {
 
+/// Section-parsing helpers of identify: and plan: (their messages: "file:line: path: expected ..., got ...").
+std::string join(const std::vector<std::string>& words, const std::string& separator = ", ");
+/// A finite number (an integer when `integer`) at `node`, else InputError naming `path`.
+double number_of(const YAML::Node& node, const std::string& file, const std::string& path, bool integer = false);
+/// InputError for the first key of the map `map` not in `keys`, with a "did you mean" suggestion.
+void only_keys(const YAML::Node& map, const std::vector<std::string>& keys, const std::string& file,
+               const std::string& path);
+
 /// One unknown: a scene key (path, or a list entry path[index]) and its bounds.
 struct Unknown {
   std::string key;   ///< as written: crack.region.z[0]

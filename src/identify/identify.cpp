@@ -54,12 +54,6 @@ constexpr int kGaussNewtonIterations = 4;
 /// chi^2 quantile of 2 degrees of freedom at 95 % (the joint region of two unknowns).
 constexpr double kChi2Two95 = 5.991464547107979;
 
-std::string join(const std::vector<std::string>& words, const std::string& separator = ", ") {
-  std::string text;
-  for (std::size_t i = 0; i < words.size(); ++i) text += (i ? separator : "") + words[i];
-  return text;
-}
-
 [[noreturn]] void fail(const std::string& file, int line, const std::string& path, const std::string& expected,
                        const std::string& got) {
   scene::fail(file, line, path, expected, got);
@@ -88,27 +82,13 @@ void check_measurement(const Measurement& m, const std::string& file, int line, 
     fail(file, line, path + ".sigma", "a standard deviation > 0", m.sigma == 0.0 ? "none or 0" : format_number(m.sigma));
 }
 
-double number_of(const YAML::Node& node, const std::string& file, const std::string& path, bool integer = false) {
-  double value = kNaN;
-  if (!node.IsScalar() || !scene::parse_number(node.Scalar(), value) || !std::isfinite(value) ||
-      (integer && value != std::floor(value))) {
-    fail(file, scene::mark_line(node), path, integer ? "an integer" : "a finite number", scene::describe_node(node));
-  }
-  return value;
-}
-
 Measurement measurement_from(const YAML::Node& node, const std::string& file, const std::string& path) {
   const int line = scene::mark_line(node);
   if (!node.IsMap()) fail(file, line, path, "a map {quantity, mode or probe and drive_hz, value, sigma}", scene::describe_node(node));
   Measurement m;
   m.where = file + ":" + std::to_string(line);
   const std::vector<std::string> keys = {"quantity", "mode", "probe", "drive_hz", "value", "sigma"};
-  for (const auto& entry : node) {
-    const std::string key = entry.first.Scalar();
-    if (std::find(keys.begin(), keys.end(), key) == keys.end())
-      fail(file, scene::mark_line(entry.first), path + "." + key, "one of " + join(keys),
-           "unknown key '" + key + "'" + scene::suggestion(key, keys));
-  }
+  only_keys(node, keys, file, path);
   if (!node["quantity"]) fail(file, line, path + ".quantity", "one of " + join(all_quantities()), "nothing");
   m.quantity = node["quantity"].Scalar();
   if (node["mode"]) m.mode = static_cast<int>(number_of(node["mode"], file, path + ".mode", true));
@@ -431,12 +411,7 @@ IdentifySpec parse_identify_section(const std::string& text, const std::string& 
     }
   if (!section.IsMap()) fail(file, spec.line, "identify", "a map with keys unknowns, measured, map, sigma, truth", scene::describe_node(section));
   const std::vector<std::string> keys = {"unknowns", "measured", "map", "sigma", "truth"};
-  for (const auto& entry : section) {
-    const std::string key = entry.first.Scalar();
-    if (std::find(keys.begin(), keys.end(), key) == keys.end())
-      fail(file, scene::mark_line(entry.first), "identify." + key, "one of " + join(keys),
-           "unknown key '" + key + "'" + scene::suggestion(key, keys));
-  }
+  only_keys(section, keys, file, "identify");
   spec.unknowns = parse_unknowns(section["unknowns"], file, "identify.unknowns", spec.line);
   // measured
   const YAML::Node measured = section["measured"];

@@ -46,32 +46,13 @@ constexpr double kDetect = 3.0;
 constexpr double kZ95 = 1.959963984540054;
 const std::vector<std::string> kFaces = {"x-", "x+", "y-", "y+", "z-", "z+"};
 
-std::string join(const std::vector<std::string>& words, const std::string& separator = ", ") {
-  std::string text;
-  for (std::size_t i = 0; i < words.size(); ++i) text += (i ? separator : "") + words[i];
-  return text;
-}
+using identify::join;
+using identify::number_of;
+using identify::only_keys;
 
 [[noreturn]] void fail(const std::string& file, int line, const std::string& path, const std::string& expected,
                        const std::string& got) {
   scene::fail(file, line, path, expected, got);
-}
-
-double number_of(const YAML::Node& node, const std::string& file, const std::string& path, bool integer = false) {
-  double value = kNaN;
-  if (!node.IsScalar() || !scene::parse_number(node.Scalar(), value) || !std::isfinite(value) ||
-      (integer && value != std::floor(value)))
-    fail(file, scene::mark_line(node), path, integer ? "an integer" : "a finite number", scene::describe_node(node));
-  return value;
-}
-
-void only_keys(const YAML::Node& map, const std::vector<std::string>& keys, const std::string& file, const std::string& path) {
-  for (const auto& entry : map) {
-    const std::string key = entry.first.Scalar();
-    if (std::find(keys.begin(), keys.end(), key) == keys.end())
-      fail(file, scene::mark_line(entry.first), path + "." + key, "one of " + join(keys),
-           "unknown key '" + key + "'" + scene::suggestion(key, keys));
-  }
 }
 
 std::vector<Vec3> points_of(const YAML::Node& node, const std::string& file, const std::string& path) {
@@ -558,7 +539,8 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
       if (row.allFinite()) figures.frequency_fisher = row * row.transpose();
       figures.frequency_hz = fb0;
       figures.frequency_sigma = spec.noise_frequency * fb0;
-      figures.z = std::isfinite(fb0) ? (fu0 - fb0) / (spec.noise_frequency * fu0) : 0.0;
+      const double frequency_z = std::isfinite(fb0) ? (fu0 - fb0) / (spec.noise_frequency * fu0) : 0.0;
+      figures.z = frequency_z;
       if (drive.subharmonic()) figures.responds = period_two_exists(tables_a[a], drive_hz);
       // The acquisition's noise floor in m: noise.floor of the largest first harmonic over the sensors.
       const double a1 = sweep_value(tables_a[a], "A1", name, drive_hz, branch);
@@ -586,7 +568,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
         figures.z = std::max(figures.z, v0 * a1 / floor_m);
       }
       if (!figures.responds) {
-        figures.z = std::isfinite(fb0) ? (fu0 - fb0) / (spec.noise_frequency * fu0) : 0.0;
+        figures.z = frequency_z;
         figures.sensor_fisher.setZero();
       }
       c.samples.push_back(figures);
