@@ -195,6 +195,9 @@ std::vector<fs::path> run_forward_cases(const YAML::Node& base, const std::vecto
                                         bool progress) {
   if (cases.empty()) return {};
   YAML::Node document = YAML::Clone(base);
+  // Only the tables are read: a sweep case draws no PNG per probe (a plan's dozens of sensors would
+  // cost several times the sweep in gnuplot starts).
+  if (command == "sweep" && document["sweep"]) document["sweep"]["plots"] = false;
   std::vector<std::pair<std::string, std::vector<std::string>>> values;  // key path -> one text per case
   const auto add = [&](const std::string& path, const std::string& text, std::size_t c) {
     auto it = std::find_if(values.begin(), values.end(), [&](const auto& entry) { return entry.first == path; });

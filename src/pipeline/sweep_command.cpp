@@ -56,6 +56,7 @@ void write_outputs(const fs::path& directory, const SweepResult& result, const S
                    nlohmann::json document, std::ostream& out) {
   io::write_csv(directory / "sweep.csv", sweep_table(result, settings));
   io::write_json(directory / "sweep.json", document);
+  if (!settings.section.plots) return;
   for (std::size_t p = 0; p < settings.probes.size(); ++p) {
     spectral::PlotOptions plot;
     plot.title = settings.probes[p].name + " u_" + axis_name(settings.probes[p].component) + ", " +

@@ -402,6 +402,8 @@ Param build_parameters() {
                        "by the mean contact stiffness and each breathing pair's harmonic block, no square "
                        "matrix), auto (dense up to 1500 unknowns).",
              {"auto", "dense", "krylov"}).defaults_to("auto"),
+      boolean("plots", "sweep_<probe>.png: each probe's amplitudes against frequency (gnuplot; skipped with a "
+                       "note when absent).").defaults_to("true"),
     }).optional_section(),
   });
   // clang-format on
@@ -808,6 +810,7 @@ SweepSection sweep_from(const Values& values, const Scene& scene) {
   sweep.tolerance = values.number("sweep.tolerance");
   sweep.max_periods = values.integer("sweep.max_periods");
   sweep.solver = values.word("sweep.solver");
+  sweep.plots = values.flag("sweep.plots");
   return sweep;
 }
 

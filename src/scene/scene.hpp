@@ -193,6 +193,7 @@ struct SweepSection {
   double tolerance = 1e-6;         ///< stepped_sine: steady when no harmonic changes more than this x A1 over a period
   int max_periods = 2000;          ///< stepped_sine: periods per frequency at most
   std::string solver = "auto";     ///< harmonic_balance linear solves: auto | dense | krylov
+  bool plots = true;               ///< sweep_<probe>.png (gnuplot)
 };
 
 /// `mesh.box.grading`: where (mode) and how (layers, ratio; auto resolved from the order) the box

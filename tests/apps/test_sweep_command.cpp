@@ -178,7 +178,9 @@ TEST(SweepCommand, KrylovSolverMatchesDense) {
   std::string output;
   std::map<std::string, nlohmann::json> runs;
   for (const char* solver : {"dense", "krylov", "auto"}) {
-    ASSERT_EQ(crackle_sweep(std::string("solver-") + solver, kScene, common + " --set sweep.solver=" + solver, &output), 0)
+    // (the auto run also draws no plot: sweep.plots=false, as identify's and plan's forward runs)
+    const std::string plots = std::string(solver) == "auto" ? " --set sweep.plots=false" : "";
+    ASSERT_EQ(crackle_sweep(std::string("solver-") + solver, kScene, common + " --set sweep.solver=" + solver + plots, &output), 0)
         << output;
     runs[solver] = read_sweep_json(std::string("solver-") + solver);
     ASSERT_TRUE(runs[solver]["completed"].get<bool>()) << solver;
@@ -187,6 +189,9 @@ TEST(SweepCommand, KrylovSolverMatchesDense) {
   EXPECT_EQ(runs["krylov"]["linear_solver"]["kind"], "krylov");
   // auto: dense below the switch (the cantilever's few pairs x 31 harmonic components < 1500 unknowns)
   EXPECT_EQ(runs["auto"]["linear_solver"]["kind"], "dense");
+  EXPECT_TRUE(fs::exists(scratch() / "solver-dense" / "sweep_tip.dat"));
+  EXPECT_FALSE(fs::exists(scratch() / "solver-auto" / "sweep_tip.dat")) << "sweep.plots=false draws no plot";
+  EXPECT_FALSE(fs::exists(scratch() / "solver-auto" / "sweep_tip.png"));
   EXPECT_FALSE(runs["dense"]["linear_solver"].contains("gmres_iterations"));
   EXPECT_EQ(runs["krylov"]["linear_solver"]["preconditioner"], "mean_stiffness+pair_blocks");
   const nlohmann::json& gmres = runs["krylov"]["linear_solver"];
