@@ -380,7 +380,7 @@ void parameter_rows(const scene::Param& param, const std::string& prefix, py::li
 py::list parameters() {
   py::list rows;
   for (const scene::Param* table :
-       {&scene::scene_parameters(), &scene::study_parameters(), &scene::identify_parameters()})
+       {&scene::scene_parameters(), &scene::study_parameters(), &scene::identify_parameters(), &scene::plan_parameters()})
     parameter_rows(*table, "", rows);
   return rows;
 }

@@ -89,6 +89,31 @@ std::vector<std::string> split_csv_line(const std::string& line) {
   return cells;
 }
 
+std::vector<int> refinement_orders(int p) {
+  const int first = std::min(p, 2);
+  return {first, first + 1, first + 2};
+}
+
+RefinementError refinement_error(double q0, double q1, double q2, double q_run) {
+  RefinementError result;
+  const double r = (q0 - q1) / (q1 - q2);
+  double error;
+  if (std::isfinite(r) && r > 1.0) {
+    const double extrapolated = q2 + (q2 - q1) / (r - 1.0);
+    error = 1.25 * std::abs(extrapolated - q_run);
+  } else {
+    error = 3.0 * std::max(std::abs(q0 - q1), std::abs(q1 - q2));
+    result.verified = false;
+  }
+  if (std::isfinite(error) && std::isfinite(q_run) && q_run != 0.0) {
+    result.relative = error / std::abs(q_run);
+  } else {
+    result.relative = 0.0;
+    result.verified = false;
+  }
+  return result;
+}
+
 std::string list_text(const std::vector<double>& values) {
   std::vector<std::string> entries;
   for (double value : values) entries.push_back(format_number(value));

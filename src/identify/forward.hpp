@@ -94,6 +94,21 @@ SweepTable read_sweep_csv(const std::filesystem::path& path);
 double sweep_value(const SweepTable& table, const std::string& quantity, const std::string& probe, double drive_hz,
                    int branch_period = 1);
 
+/// The mesh orders of the model-error estimate of a forward model run at order p: {min(p, 2),
+/// +1, +2} (identify's and plan's; DETECTION.md sec. 1, the p-refinement of MODEL.md's elements).
+std::vector<int> refinement_orders(int p);
+
+/// The numerical error of a quantity from its values q0, q1, q2 at the three refinement_orders and
+/// its value q_run at the order that is run: Richardson's extrapolation from the three levels when
+/// they converge monotonically (ratio of differences r > 1), 1.25 |q_inf - q_run| (the factor of a
+/// GCI); otherwise 3 times the larger difference and verified = false. Relative to |q_run|; 0 and
+/// not verified when a level is missing (NaN).
+struct RefinementError {
+  double relative = 0.0;
+  bool verified = true;
+};
+RefinementError refinement_error(double q0, double q1, double q2, double q_run);
+
 /// The YAML text of a number list [a, b, c].
 std::string list_text(const std::vector<double>& values);
 

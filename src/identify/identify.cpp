@@ -532,8 +532,8 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
   // the other cores).
   const VectorX middle = 0.5 * (bounds.lower + bounds.upper);
   const int p = scene.box.order;
-  const int first = std::min(p, 2);
-  const std::vector<int> levels = {first, first + 1, first + 2};
+  const std::vector<int> levels = refinement_orders(p);
+  const int first = levels.front();
   log << "identify: map of " << total << " forward runs (" << spec.map_points << " per unknown) and the model error "
       << "from the orders " << levels[0] << ", " << levels[1] << ", " << levels[2] << " in the middle of the bounds\n";
   const fs::path map_dir = options.map_cache.empty() ? dir / "map" : fs::path(options.map_cache);
@@ -566,19 +566,11 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
   std::vector<bool> error_verified(n, true);
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Index ii = static_cast<Eigen::Index>(i);
-    const double q0 = level_models[0][ii], q1 = level_models[1][ii], q2 = level_models[2][ii];
-    const double qp = level_models[static_cast<std::size_t>(p - first)][ii];
-    const double r = (q0 - q1) / (q1 - q2);
-    double error;
-    if (std::isfinite(r) && r > 1.0) {
-      const double extrapolated = q2 + (q2 - q1) / (r - 1.0);
-      error = 1.25 * std::abs(extrapolated - qp);
-    } else {
-      error = 3.0 * std::max(std::abs(q0 - q1), std::abs(q1 - q2));
-      error_verified[i] = false;
-    }
+    const RefinementError error = refinement_error(level_models[0][ii], level_models[1][ii], level_models[2][ii],
+                                                   level_models[static_cast<std::size_t>(p - first)][ii]);
     // Relative to the value, carried to every parameter vector.
-    model_error[ii] = std::isfinite(error) ? error / std::abs(qp) : 0.0;
+    model_error[ii] = error.relative;
+    error_verified[i] = error.verified;
   }
   auto weights_at = [&](const VectorX& model) {
     VectorX w(static_cast<Eigen::Index>(n));

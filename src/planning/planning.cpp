@@ -20,6 +20,7 @@
 #include "scene/scene.hpp"
 #include "scene/schema.hpp"
 #include "scene/yaml_text.hpp"
+#include "spectral/plot.hpp"
 #include "study/plot.hpp"
 
 namespace crackle::planning {
@@ -49,6 +50,13 @@ const std::vector<std::string> kFaces = {"x-", "x+", "y-", "y+", "z-", "z+"};
 using identify::join;
 using identify::number_of;
 using identify::only_keys;
+
+/// The keys of a section of the parameter table (scene::plan_parameters(), which documents them).
+std::vector<std::string> keys_of(const scene::Param& table) {
+  std::vector<std::string> keys;
+  for (const scene::Param& child : table.children) keys.push_back(child.name);
+  return keys;
+}
 
 [[noreturn]] void fail(const std::string& file, int line, const std::string& path, const std::string& expected,
                        const std::string& got) {
@@ -97,6 +105,61 @@ std::string drive_label(const PlanSpec& spec, std::size_t p, std::size_t f) {
   return label.str();
 }
 
+/// plan_map.png: a figure of each drive point and frequency over the sensor face (a face grid
+/// only), one panel each, drawn by gnuplot; plan_map.dat/.gp beside it. "" when drawn, else why not.
+std::string plot_face_maps(const fs::path& dir, const PlanSpec& spec, const std::string& figure,
+                           const std::vector<std::pair<std::string, std::vector<double>>>& panels) {
+  if (spec.face.empty() || spec.grid[0] < 2 || spec.grid[1] < 2) return "";  // a list of points: the VTU only
+  const int normal = spec.face[0] - 'x';
+  const int u = std::min((normal + 1) % 3, (normal + 2) % 3), v = std::max((normal + 1) % 3, (normal + 2) % 3);
+  std::ostringstream data, plots;
+  int shown = 0;
+  for (const auto& [title, values] : panels) {
+    if (std::none_of(values.begin(), values.end(), [](double x) { return std::isfinite(x); })) continue;
+    data << "# " << title << "\n# " << static_cast<char>('x' + u) << " [m]  " << static_cast<char>('x' + v) << " [m]  "
+         << figure << "\n";
+    for (int a = 0; a < spec.grid[0]; ++a) {
+      for (int b = 0; b < spec.grid[1]; ++b) {
+        const std::size_t i = static_cast<std::size_t>(a * spec.grid[1] + b);
+        data << format_number(spec.sensors[i][u]) << " " << format_number(spec.sensors[i][v]) << " "
+             << (std::isfinite(values[i]) ? format_number(values[i]) : std::string("NaN")) << "\n";
+      }
+      data << "\n";
+    }
+    data << "\n";
+    plots << "set title " << spectral::gnuplot_quote(title) << "\nsplot 'plan_map.dat' index " << shown
+          << " using 1:2:3 with pm3d notitle\n";
+    ++shown;
+  }
+  if (shown == 0) return "plan_map.png: no candidate responds: nothing to map";
+  // a long face (a beam's) as one column of wide panels, else up to three square-scaled columns
+  double extent[2] = {0.0, 0.0};
+  for (const Vec3& x : spec.sensors)
+    for (int c = 0; c < 2; ++c) extent[c] = std::max(extent[c], std::abs(x[c == 0 ? u : v] - spec.sensors[0][c == 0 ? u : v]));
+  const bool long_face = extent[0] > 3.0 * extent[1] || extent[1] > 3.0 * extent[0];
+  const int columns = long_face ? 1 : std::min(shown, 3), rows = (shown + columns - 1) / columns;
+  std::ostringstream script;
+  script << "# gnuplot script written by crackle plan; run: gnuplot plan_map.gp\n"
+         << "set terminal pngcairo size " << (long_face ? 1000 : 440 * columns) << ","
+         << (long_face ? 230 : 400) * rows + 40 << " noenhanced\n"
+         << "set output 'plan_map.png'\nset view map\nset pm3d map\nset palette rgb 33,13,10\n"
+         << "set xlabel '" << static_cast<char>('x' + u) << " [m]'\nset ylabel '" << static_cast<char>('x' + v)
+         << " [m]'\n" << (long_face ? "" : "set size ratio -1\n") << "set multiplot layout " << rows << "," << columns
+         << " title " << spectral::gnuplot_quote(figure + " over the sensor face " + spec.face +
+                                                 " (colour), per drive point and frequency")
+         << "\n" << plots.str() << "unset multiplot\n";
+  io::write_file_atomic(dir / "plan_map.dat", data.str());
+  io::write_file_atomic(dir / "plan_map.gp", script.str());
+  spectral::PlotOptions probe;
+  if (!spectral::gnuplot_available(probe)) return "gnuplot not found: plan_map.png not drawn (plan_map.gp written)";
+  std::error_code ignored;
+  fs::remove(dir / "plan_map.png", ignored);
+  const std::string command = "cd " + spectral::shell_quote(dir.string()) + " && gnuplot plan_map.gp > /dev/null 2>&1";
+  if (std::system(command.c_str()) != 0 || !fs::is_regular_file(dir / "plan_map.png", ignored))
+    return "gnuplot failed on plan_map.gp";
+  return "";
+}
+
 json finite_or_null(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
 
 /// One sample's figures for a candidate.
@@ -106,7 +169,8 @@ struct SampleFigures {
   MatrixX sensor_fisher;     ///< of the sensor's ratios
   double z = 0.0;            ///< the largest detection statistic
   std::vector<double> values;  ///< the sensor's ratios at the sample
-  std::vector<double> sigmas;  ///< their standard deviations
+  std::vector<double> sigmas;  ///< their standard deviations: noise and model error
+  std::vector<double> noise_sigmas;  ///< the noise's part (a synthetic measurement's sigma)
   double frequency_hz = kNaN, frequency_sigma = kNaN;  ///< the driven mode's bilinear frequency
 };
 
@@ -117,6 +181,7 @@ struct Candidate {
   double mean_log_det = -kInf;
   std::vector<double> worst_width, mean_width;
   std::vector<double> smallest_crack;  ///< per position
+  std::vector<identify::RefinementError> model_error;  ///< of each ratio quantity, then of f_bilinear
 };
 
 std::string vtu_text(const PlanSpec& spec, const std::vector<std::pair<std::string, std::vector<double>>>& arrays) {
@@ -203,7 +268,8 @@ PlanSpec parse_plan_section(const std::string& text, const std::string& file, co
       section = entry.second;
       spec.line = scene::mark_line(entry.first);
     }
-  const std::vector<std::string> keys = {"prior", "samples", "size", "sensors", "drives", "noise", "combine"};
+  const scene::Param& table = *scene::plan_parameters().child("plan");
+  const std::vector<std::string> keys = keys_of(table);
   if (!section.IsMap()) fail(file, spec.line, "plan", "a map with keys " + join(keys), scene::describe_node(section));
   only_keys(section, keys, file, "plan");
   spec.prior = identify::parse_unknowns(section["prior"], file, "plan.prior", spec.line);
@@ -232,7 +298,7 @@ PlanSpec parse_plan_section(const std::string& text, const std::string& file, co
   if (!sensors || !sensors.IsMap())
     fail(file, sensors ? scene::mark_line(sensors) : spec.line, "plan.sensors",
          "a map {face: z+, spacing: 0.01} or {points: [[x, y, z], ...]}", sensors ? scene::describe_node(sensors) : "nothing");
-  only_keys(sensors, {"face", "spacing", "points", "component"}, file, "plan.sensors");
+  only_keys(sensors, keys_of(*table.child("sensors")), file, "plan.sensors");
   if (const YAML::Node component = sensors["component"]) {
     const std::string axis = component.Scalar();
     if (axis != "x" && axis != "y" && axis != "z")
@@ -277,7 +343,7 @@ PlanSpec parse_plan_section(const std::string& text, const std::string& file, co
   if (!drives || !drives.IsMap())
     fail(file, drives ? scene::mark_line(drives) : spec.line, "plan.drives", "a map {points: [[x, y, z], ...], frequencies: [{mode, ratio}, ...]}",
          drives ? scene::describe_node(drives) : "nothing");
-  only_keys(drives, {"points", "frequencies"}, file, "plan.drives");
+  only_keys(drives, keys_of(*table.child("drives")), file, "plan.drives");
   if (!drives["points"]) fail(file, scene::mark_line(drives), "plan.drives.points", "a list of drive points [[x, y, z], ...]", "nothing");
   spec.drive_points = points_of(drives["points"], file, "plan.drives.points");
   const YAML::Node frequencies = drives["frequencies"];
@@ -288,7 +354,7 @@ PlanSpec parse_plan_section(const std::string& text, const std::string& file, co
     const std::string where = "plan.drives.frequencies[" + std::to_string(i) + "]";
     const YAML::Node f = frequencies[i];
     if (!f.IsMap()) fail(file, scene::mark_line(f), where, "a map {mode, ratio}", scene::describe_node(f));
-    only_keys(f, {"mode", "ratio"}, file, where);
+    only_keys(f, keys_of(*table.child("drives")->child("frequencies")), file, where);
     DriveFrequency drive;
     if (!f["mode"]) fail(file, scene::mark_line(f), where + ".mode", "an uncracked mode number >= 1", "nothing");
     drive.mode = static_cast<int>(number_of(f["mode"], file, where + ".mode", true));
@@ -302,7 +368,7 @@ PlanSpec parse_plan_section(const std::string& text, const std::string& file, co
   // noise
   if (const YAML::Node noise = section["noise"]) {
     if (!noise.IsMap()) fail(file, scene::mark_line(noise), "plan.noise", "a map {frequency, ratio, floor}", scene::describe_node(noise));
-    only_keys(noise, {"frequency", "ratio", "floor"}, file, "plan.noise");
+    only_keys(noise, keys_of(*table.child("noise")), file, "plan.noise");
     const auto positive = [&](const char* key, double& target) {
       if (!noise[key]) return;
       target = number_of(noise[key], file, std::string("plan.noise.") + key);
@@ -413,20 +479,35 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   // ---- 1. the bilinear frequencies of the driven modes at every point (crackle modal)
   log << "plan: " << n_samples << " prior samples x " << n_drives << " drive points x " << n_freq << " drive frequencies, "
       << n_sensors << " candidate sensors; 1. modal frequencies at " << points.size() << " points\n";
+  // The model error (identify's: the orders p, p+1, p+2 in the middle of the prior) comes first in
+  // each batch, the highest order first (the longest runs start while the others fill the cores).
+  const VectorX middle = 0.5 * (bounds.lower + bounds.upper);
+  const int order_run = scene.box.order;
+  const std::vector<int> levels = identify::refinement_orders(order_run);
+  const std::size_t n_levels = levels.size();
   std::vector<ForwardCase> modal_cases;
-  for (const VectorX& point : points) modal_cases.push_back({point, 0, {}});
+  for (std::size_t l = n_levels; l-- > 0;) modal_cases.push_back({middle, levels[l], {}});
+  for (const VectorX& point : points) modal_cases.push_back({point, order_run, {}});
   const std::vector<fs::path> modal_folders =
       identify::run_forward_cases(base, spec.prior, modal_cases, "modal", dir / "modal", runner, log, true);
   forward_runs += static_cast<int>(modal_folders.size());
-  std::vector<std::vector<double>> f_u(points.size()), f_b(points.size());
+  std::vector<std::vector<double>> f_u(points.size()), f_b(points.size()), level_f_b(n_levels);
   for (std::size_t c = 0; c < modal_folders.size(); ++c) {
     std::ifstream stream(modal_folders[c] / "modal.json");
     const json modal = json::parse(stream);
+    std::vector<double>& bilinear = c < n_levels ? level_f_b[n_levels - 1 - c] : f_b[c - n_levels];
     for (const json& pair : modal["pairs"]) {
-      f_u[c].push_back(pair["f_uncracked_hz"].get<double>());
-      f_b[c].push_back(pair.value("paired", true) ? pair["f_bilinear_hz"].get<double>() : kNaN);
+      if (c >= n_levels) f_u[c - n_levels].push_back(pair["f_uncracked_hz"].get<double>());
+      bilinear.push_back(pair.value("paired", true) ? pair["f_bilinear_hz"].get<double>() : kNaN);
     }
   }
+  // the relative model error of each mode's bilinear frequency (the driven ones are used)
+  const auto at = [](const std::vector<double>& values, std::size_t i) { return values.size() > i ? values[i] : kNaN; };
+  std::vector<identify::RefinementError> frequency_error;
+  const std::size_t run_level = static_cast<std::size_t>(order_run - levels.front());
+  for (std::size_t m = 0; m < static_cast<std::size_t>(scene.modal.modes); ++m)
+    frequency_error.push_back(identify::refinement_error(at(level_f_b[0], m), at(level_f_b[1], m), at(level_f_b[2], m),
+                                                         at(level_f_b[run_level], m)));
   const auto sweep_settings = [&](const DriveFrequency& f, std::vector<std::pair<std::string, std::string>>& set) {
     set.emplace_back("sweep.points", std::to_string(f.subharmonic() ? kSubharmonicPoints : 2));
     set.emplace_back("sweep.stability", f.subharmonic() ? "true" : "false");
@@ -437,12 +518,14 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   YAML::Node base_a = YAML::Clone(base);
   base_a["sweep"]["frequency"] = YAML::Load("{from: {mode: 1, ratio: 1}, to: {mode: 1, ratio: 2}}");
   std::vector<ForwardCase> cases_a;
-  for (std::size_t s = 0; s < n_samples; ++s)
+  // the model error's levels (the middle of the prior at each refinement order) first, then the samples
+  for (std::size_t s = 0; s < n_levels + n_samples; ++s)
     for (std::size_t p = 0; p < n_drives; ++p)
       for (std::size_t f = 0; f < n_freq; ++f) {
         const DriveFrequency& drive = spec.frequencies[f];
         const double half = drive.subharmonic() ? kSubharmonicHalfWidth : kNarrowHalfWidth;
-        ForwardCase run{samples[s], 0, {}};
+        ForwardCase run = s < n_levels ? ForwardCase{middle, levels[n_levels - 1 - s], {}}
+                                       : ForwardCase{samples[s - n_levels], order_run, {}};
         const Vec3& x = spec.drive_points[p];
         run.set = {{"transient.excitation.point", identify::list_text({x[0], x[1], x[2]})},
                    {"sweep.frequency.from.mode", std::to_string(drive.mode)},
@@ -452,7 +535,8 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
         sweep_settings(drive, run.set);
         cases_a.push_back(run);
       }
-  log << "plan: 2. sweeps at the samples: " << cases_a.size() << " runs\n";
+  log << "plan: 2. sweeps at the samples: " << cases_a.size() << " runs (" << n_levels * n_drives * n_freq
+      << " of them for the model error)\n";
   const std::vector<fs::path> folders_a =
       identify::run_forward_cases(base_a, spec.prior, cases_a, "sweep", dir / "samples", runner, log, true);
   forward_runs += static_cast<int>(folders_a.size());
@@ -465,6 +549,23 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
     const json sweep = json::parse(stream);
     range_a.push_back({sweep["settings"]["from_hz"].get<double>(), sweep["settings"]["to_hz"].get<double>()});
   }
+  // the model error's runs: level l (order levels[l]) of drive p and frequency f, at their own drive
+  const std::size_t n_level_runs = n_levels * n_drives * n_freq;
+  std::vector<SweepTable> level_tables(tables_a.begin(), tables_a.begin() + static_cast<std::ptrdiff_t>(n_level_runs));
+  std::vector<std::array<double, 2>> level_ranges(range_a.begin(), range_a.begin() + static_cast<std::ptrdiff_t>(n_level_runs));
+  tables_a.erase(tables_a.begin(), tables_a.begin() + static_cast<std::ptrdiff_t>(n_level_runs));
+  range_a.erase(range_a.begin(), range_a.begin() + static_cast<std::ptrdiff_t>(n_level_runs));
+  const auto level_run = [&](std::size_t l, std::size_t p, std::size_t f) { return ((n_levels - 1 - l) * n_drives + p) * n_freq + f; };
+  // the relative model error of a quantity of a sensor under drive p, frequency f
+  const auto ratio_error = [&](const std::string& quantity, const std::string& sensor, std::size_t p, std::size_t f) {
+    const int branch = spec.frequencies[f].subharmonic() ? 2 : 1;
+    std::vector<double> q(n_levels);
+    for (std::size_t l = 0; l < n_levels; ++l) {
+      const std::size_t r = level_run(l, p, f);
+      q[l] = sweep_value(level_tables[r], quantity, sensor, 0.5 * (level_ranges[r][0] + level_ranges[r][1]), branch);
+    }
+    return identify::refinement_error(q[0], q[1], q[2], q[run_level]);
+  };
 
   // the largest first harmonic over the sensors of each sample run (the reference of noise.floor)
   std::vector<double> largest_a1(tables_a.size(), 0.0);
@@ -516,12 +617,15 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   std::vector<Candidate> candidates;
   for (std::size_t p = 0; p < n_drives; ++p)
     for (std::size_t f = 0; f < n_freq; ++f)
-      for (std::size_t i = 0; i < n_sensors; ++i) candidates.push_back({i, p, f, {}, 0, -kInf, {}, {}, {}});
+      for (std::size_t i = 0; i < n_sensors; ++i) candidates.push_back({i, p, f, {}, 0, -kInf, {}, {}, {}, {}});
   for (Candidate& c : candidates) {
     const DriveFrequency& drive = spec.frequencies[c.frequency];
     const int branch = drive.subharmonic() ? 2 : 1;
     const std::size_t mode = static_cast<std::size_t>(drive.mode - 1);
     const std::string name = sensor_name(c.sensor);
+    for (const std::string& q : ratio_quantities(drive)) c.model_error.push_back(ratio_error(q, name, c.drive, c.frequency));
+    c.model_error.push_back(frequency_error[mode]);
+    const double frequency_eps = frequency_error[mode].relative;
     for (std::size_t s = 0; s < n_samples; ++s) {
       SampleFigures figures;
       const std::size_t a = index_a(s, c.drive, c.frequency);
@@ -532,29 +636,36 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
       VectorX row(static_cast<Eigen::Index>(k));
       const double fb0 = f_b[p0].size() > mode ? f_b[p0][mode] : kNaN;
       const double fu0 = f_u[p0].size() > mode ? f_u[p0][mode] : kNaN;
+      // sigma of the frequency: the measurement's and the model's error (as identify weighs it)
+      const double frequency_sigma = std::hypot(spec.noise_frequency, frequency_eps) * fb0;
       for (std::size_t j = 1; j <= k; ++j) {
         const double h = points[p0 + j][static_cast<Eigen::Index>(j - 1)] - points[p0][static_cast<Eigen::Index>(j - 1)];
-        row[static_cast<Eigen::Index>(j - 1)] = (f_b[p0 + j][mode] - fb0) / h / (spec.noise_frequency * fb0);
+        row[static_cast<Eigen::Index>(j - 1)] = (f_b[p0 + j][mode] - fb0) / h / frequency_sigma;
       }
       if (row.allFinite()) figures.frequency_fisher = row * row.transpose();
       figures.frequency_hz = fb0;
-      figures.frequency_sigma = spec.noise_frequency * fb0;
+      figures.frequency_sigma = frequency_sigma;
       const double frequency_z = std::isfinite(fb0) ? (fu0 - fb0) / (spec.noise_frequency * fu0) : 0.0;
       figures.z = frequency_z;
       if (drive.subharmonic()) figures.responds = period_two_exists(tables_a[a], drive_hz);
       // The acquisition's noise floor in m: noise.floor of the largest first harmonic over the sensors.
       const double a1 = sweep_value(tables_a[a], "A1", name, drive_hz, branch);
       const double floor_m = spec.noise_floor * largest_a1[a];
-      for (const std::string& q : ratio_quantities(drive)) {
+      const std::vector<std::string> quantities = ratio_quantities(drive);
+      for (std::size_t qi = 0; qi < quantities.size(); ++qi) {
+        const std::string& q = quantities[qi];
         const double v0 = sweep_value(tables_a[a], q, name, drive_hz, branch);
         figures.values.push_back(v0);
         if (!std::isfinite(v0)) {
           figures.sigmas.push_back(kNaN);
+          figures.noise_sigmas.push_back(kNaN);
           figures.responds = false;
           continue;
         }
-        const double sigma = std::hypot(spec.noise_ratio * v0, floor_m / a1);
+        const double sigma = std::sqrt(std::pow(spec.noise_ratio * v0, 2) + std::pow(floor_m / a1, 2) +
+                                       std::pow(c.model_error[qi].relative * v0, 2));
         figures.sigmas.push_back(sigma);
+        figures.noise_sigmas.push_back(std::hypot(spec.noise_ratio * v0, floor_m / a1));
         for (std::size_t j = 1; j <= k; ++j) {
           const double h = points[p0 + j][static_cast<Eigen::Index>(j - 1)] - points[p0][static_cast<Eigen::Index>(j - 1)];
           const double v = sweep_value(table_b(s, j, c.drive, c.frequency), q, name, drive_hz, branch);
@@ -672,6 +783,14 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   document["size_key"] = spec.prior[size].key;
   document["smaller_crack_towards"] = small_first ? "lower" : "upper";
   document["noise"] = {{"frequency", spec.noise_frequency}, {"ratio", spec.noise_ratio}, {"floor", spec.noise_floor}};
+  json frequency_errors = json::array();
+  for (std::size_t m = 0; m < frequency_error.size(); ++m)
+    frequency_errors.push_back({{"mode", m + 1}, {"relative", frequency_error[m].relative}, {"verified", frequency_error[m].verified}});
+  document["model_error"] = {{"orders", levels}, {"order_run", order_run}, {"at", theta_json(middle)},
+                             {"f_bilinear", frequency_errors},
+                             {"note", "the p-refinement estimate of identify, in the middle of the prior; added in quadrature "
+                                      "to the noise in the Fisher information (not in detection: a detection compares with "
+                                      "the same part's baseline)"}};
   document["averaging"] = "log_det: mean over the prior samples where the candidate responds; widths_95: mean and worst "
                           "over them; candidates that respond at every sample rank first";
   json sample_list = json::array();
@@ -697,6 +816,12 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
                   {"responding_samples", c.responding},
                   {"log_det", finite_or_null(c.mean_log_det)},
                   {"widths_95", {{"mean", keyed(c.mean_width)}, {"worst", keyed(c.worst_width)}}}};
+    json errors = json::object();
+    const std::vector<std::string> names_of = ratio_quantities(drive);
+    for (std::size_t q = 0; q < c.model_error.size(); ++q)
+      errors[q < names_of.size() ? names_of[q] : "f_bilinear"] = {{"relative", c.model_error[q].relative},
+                                                                  {"verified", c.model_error[q].verified}};
+    entry["model_error"] = errors;
     json detect = json::array();
     for (std::size_t q = 0; q < position_samples.size(); ++q) {
       json position = json::object();
@@ -712,16 +837,19 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
       const std::size_t a = index_a(s, c.drive, c.frequency);
       json values = json::object();
       const auto names = ratio_quantities(drive);
-      json sigmas = json::object();
+      json sigmas = json::object(), noise_sigmas = json::object();
       for (std::size_t q = 0; q < names.size(); ++q) {
         values[names[q]] = finite_or_null(figures.values[q]);
         sigmas[names[q]] = finite_or_null(figures.sigmas[q]);
+        noise_sigmas[names[q]] = finite_or_null(figures.noise_sigmas[q]);
       }
       values["f_bilinear"] = finite_or_null(figures.frequency_hz);
       sigmas["f_bilinear"] = finite_or_null(figures.frequency_sigma);
+      noise_sigmas["f_bilinear"] = finite_or_null(spec.noise_frequency * figures.frequency_hz);
       per.push_back({{"drive_hz", 0.5 * (range_a[a][0] + range_a[a][1])}, {"responds", figures.responds},
                      {"log_det", finite_or_null(figures.responds ? log_det(figures.frequency_fisher + figures.sensor_fisher) : kNaN)},
-                     {"z", figures.z}, {"values", values}, {"sigmas", sigmas}});
+                     {"z", figures.z}, {"values", values}, {"sigmas", sigmas},
+                     {"noise_sigmas", noise_sigmas}});
     }
     entry["per_sample"] = per;
     ranked.push_back(entry);
@@ -753,7 +881,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
                               {"sets", sets}};
 
   // ---- plan_sensors.vtu and the plots
-  std::vector<std::pair<std::string, std::vector<double>>> arrays;
+  std::vector<std::pair<std::string, std::vector<double>>> arrays, map_panels;
   study::LinePlot plot{"log det F along the sensors (best over the sensors across)", "", "mean log det F", {}};
   const int along = spec.face.empty() ? -1 : std::min(((spec.face[0] - 'x') + 1) % 3, ((spec.face[0] - 'x') + 2) % 3);
   plot.x_label = along < 0 ? "sensor" : std::string(1, static_cast<char>('x' + along)) + " [m]";
@@ -772,6 +900,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
         for (std::size_t j = 0; j < k; ++j) widths[j][c.sensor] = std::isfinite(c.mean_width[j]) ? c.mean_width[j] : kNaN;
       }
       arrays.emplace_back(tag + " log_det", det);
+      map_panels.emplace_back(drive_label(spec, p, f), det);
       arrays.emplace_back(tag + " responding fraction", responds);
       arrays.emplace_back(tag + " smallest " + spec.prior[size].key + " (worst position)", smallest);
       for (std::size_t j = 0; j < k; ++j) arrays.emplace_back(tag + " width95 " + spec.prior[j].key, widths[j]);
@@ -798,8 +927,15 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   json files = json::array({"plan.json", "plan_sensors.vtu"});
   const std::string note = study::plot_lines(dir / "plan_log_det.png", plot, "gnuplot");
   if (note.empty()) files.push_back("plan_log_det.png");
+  json plot_notes = json::array();
+  if (!note.empty()) plot_notes.push_back(note);
+  if (!spec.face.empty()) {
+    const std::string map_note = plot_face_maps(dir, spec, "mean log det F", map_panels);
+    if (map_note.empty()) files.push_back("plan_map.png");
+    else plot_notes.push_back(map_note);
+  }
   document["files"] = files;
-  if (!note.empty()) document["plot_notes"] = json::array({note});
+  if (!plot_notes.empty()) document["plot_notes"] = plot_notes;
   document["forward_runs"] = forward_runs;
   document["elapsed_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   io::write_file_atomic(dir / "plan.json", document.dump(2) + "\n");

@@ -21,10 +21,12 @@
 /// (A1/2/A1 where that branch exists and is stable). The same cases at theta + h e_j (fixed drive
 /// in Hz) give the Jacobian; `crackle modal` cases at the same points give the bilinear frequency of
 /// each driven mode. Figures per candidate and sample:
-/// - Fisher information F = J^T Sigma^-1 J of the bilinear frequency (sigma noise.frequency
-///   relative) and the sensor's ratios (sigma = hypot(noise.ratio value, floor / A1), floor =
-///   noise.floor times the largest A1 over the sensors: the acquisition's noise floor in m);
-///   log det F and the 95 % widths 1.96 sqrt(diag F^-1);
+/// - Fisher information F = J^T Sigma^-1 J of the bilinear frequency (sigma = hypot(noise.frequency,
+///   eps) f_b) and the sensor's ratios (sigma^2 = (noise.ratio v)^2 + (floor / A1)^2 + (eps v)^2,
+///   floor = noise.floor times the largest A1 over the sensors: the acquisition's noise floor in m),
+///   eps the relative model error of the quantity as identify weighs it (identify::refinement_error
+///   on the orders p, p+1, p+2 in the middle of the prior: 3 modal runs and 3 sweeps per drive point
+///   and frequency more); log det F and the 95 % widths 1.96 sqrt(diag F^-1);
 /// - detection: z = (f_u - f_b) / (noise.frequency f_u) and, for each harmonic, its amplitude over
 ///   the floor (the uncracked body's harmonics are zero: a measurement of it reads the floor); detected when the
 ///   largest z exceeds 3; the smallest detectable crack per position interpolates z along the size
@@ -34,7 +36,7 @@
 /// Candidates are ranked by the mean of log det F over the samples where they respond (those that
 /// respond at every sample first); the best k = 1..combine sensors for the best drive are chosen
 /// greedily on the mean log det of the summed F.
-/// Outputs: plan.json, plan_sensors.vtu, plan_<drive>.png (log det along the sensors).
+/// Outputs: plan.json, plan_sensors.vtu, plan_log_det.png (log det along the sensors), plan_map.png (over a face of sensors).
 #include <iosfwd>
 #include <string>
 #include <vector>

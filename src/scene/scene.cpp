@@ -1038,6 +1038,40 @@ const Param& identify_parameters() {
   return table;
 }
 
+const Param& plan_parameters() {
+  static const Param table = map_of("", "", {map_of("plan", "Test planning run by `crackle plan` (check, modal and run ignore it); parsed by src/planning, which accepts exactly these keys.", {
+      map_of("prior", "The cracks to design for: scene keys with ranges [low, high], in the form of identify.unknowns "
+                      "(a list entry by its index: `crack.region.z[0]`). The crack moves on a grid made for the middle.", {}).required(),
+      integer("samples", "Prior samples per key: the centres of equal bins (samples^keys points in all).").at_least(2).at_most(9).defaults_to("3"),
+      text("size", "The prior key that measures the crack's size, along which the smallest detectable crack is "
+                   "interpolated (default: the last key)."),
+      map_of("sensors", "Candidate sensor points: a face sampled on a grid, or a list of points.", {
+        choice("face", "A face of the box whose grid of points are the candidates.", {"x-", "x+", "y-", "y+", "z-", "z+"}),
+        number("spacing", "Spacing of the face's grid (with face; at most 2000 points).").with_unit("m").above(0),
+        map_of("points", "The candidate points [[x, y, z], ...] instead of a face.", {}),
+        choice("component", "The displacement component a sensor measures (default: the excitation's direction).", {"x", "y", "z"}),
+      }).required(),
+      map_of("drives", "Candidate drives: the points of the scene's harmonic excitation (its direction, amplitude and "
+                       "damping) and its frequencies.", {
+        map_of("points", "Drive points [[x, y, z], ...] inside the body's box.", {}).required(),
+        list_of("frequencies", "Drive frequencies as multiples of a mode's bilinear frequency; a ratio >= 1.5 drives "
+                               "the f/2 sub-harmonic (a sweep with stability finds its period-two branch).", {
+          integer("mode", "Uncracked mode number (1 = lowest), at most modal.modes.").at_least(1).required(),
+          number("ratio", "Drive frequency over the mode's bilinear frequency.").above(0).at_most(10).required(),
+        }).required(),
+      }).required(),
+      map_of("noise", "The measurement's noise, relative; the model error (identify's p-refinement estimate in the "
+                      "middle of the prior) is added in quadrature.", {
+        number("frequency", "Relative sigma of a measured frequency.").above(0).defaults_to("0.0005"),
+        number("ratio", "Relative sigma of a measured harmonic ratio.").above(0).defaults_to("0.05"),
+        number("floor", "Noise floor of a harmonic amplitude, relative to the largest first harmonic over the sensors "
+                        "(the acquisition's dynamic range).").above(0).defaults_to("1.0e-4"),
+      }),
+      integer("combine", "The best sets of 1..combine sensors (greedy on log det).").at_least(1).at_most(5).defaults_to("3"),
+  }).optional_section()});
+  return table;
+}
+
 std::string scene_format_markdown() {
   return "# Scene format\n\n"
          "<!-- Generated from the parameter table in src/scene/scene.cpp by scene_format_markdown(); do not "
@@ -1059,7 +1093,11 @@ std::string scene_format_markdown() {
          "\n## Identification\n\n"
          "`crackle identify scene.yaml -o DIR` fits the unknowns below to the measured signatures "
          "(README, \"Damage identification\").\n\n" +
-         markdown_table(identify_parameters());
+         markdown_table(identify_parameters()) +
+         "\n## Test planning\n\n"
+         "`crackle plan scene.yaml -o DIR` ranks candidate sensors, drive points and drive frequencies for the "
+         "cracks of the prior (README, \"Test planning\").\n\n" +
+         markdown_table(plan_parameters());
 }
 
 }  // namespace crackle::scene

@@ -270,6 +270,8 @@ const Param& scene_parameters();
 const Param& study_parameters();
 /// The `identify:` section (read by src/identify, not by load_scene), declared for docs/scene-format.md.
 const Param& identify_parameters();
+/// The `plan:` section (read by src/planning, which takes its key lists from here), for docs/scene-format.md.
+const Param& plan_parameters();
 
 /// Markdown reference of every scene key, generated from the parameter table.
 std::string scene_format_markdown();
