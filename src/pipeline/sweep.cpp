@@ -73,14 +73,20 @@ void add_harmonics_warning(const SweepSettings& settings, double threshold, int 
           format_number(first_flagged_hz) + " Hz: raise sweep.harmonics");
 }
 
-/// Whether the (first) branch reached the end of the range, with a warning when not.
-void add_completion(const SweepSettings& settings, SweepResult& result) {
+/// Whether the (first) branch reached the end of the range, with a warning when not: its reason is the
+/// point limit (`max_points`) when the branch has that many points, else the corrector.
+void add_completion(const SweepSettings& settings, int max_points, SweepResult& result) {
   const double last_hz = result.points.empty() ? settings.from_hz : result.points.back().frequency_hz();
   const bool upward = settings.to_hz > settings.from_hz;
   result.completed = upward ? last_hz >= settings.to_hz : last_hz <= settings.to_hz;
   if (!result.completed) {
+    const bool at_limit = static_cast<int>(result.points.size()) >= max_points;
     result.warnings.push_back("the continuation stopped at " + format_number(last_hz) + " Hz, before " +
-                              format_number(settings.to_hz) + " Hz (the corrector failed down to the smallest step)");
+                              format_number(settings.to_hz) + " Hz (" +
+                              (at_limit ? "after the most points it may take, " + std::to_string(max_points) +
+                                              " = 50 x sweep.points"
+                                        : std::string("the corrector failed down to the smallest step")) +
+                              ")");
   }
 }
 
@@ -291,9 +297,10 @@ double period_two_share(const sweep::Solution& solution, Index rows) {
 
 constexpr double kJoinedShare = 1e-3;  ///< a nu = 2 point below this share has rejoined the period-one branch
 
-/// The solver options of a sweep with `harmonics` of the base frequency Omega / nu.
+/// The solver options of a sweep with `harmonics` of the base frequency Omega / nu, driven from
+/// `drive_omega` [rad/s] (the automatic gap scale's dynamic floor).
 sweep::HarmonicBalanceOptions balance_options(const reduced::ReducedSystem& system, int harmonics, int nu,
-                                              const std::string& solver) {
+                                              const std::string& solver, double drive_omega) {
   sweep::HarmonicBalanceOptions options;
   options.harmonics = harmonics;
   options.subharmonic = nu;
@@ -303,6 +310,7 @@ sweep::HarmonicBalanceOptions balance_options(const reduced::ReducedSystem& syst
   // The arclength runs in (G / s, Omega / Omega_from): with s the static gap response the many gap
   // harmonics dominate it near a super-harmonic resonance and the frequency creeps (thousands of
   // points). A larger s makes the step mostly frequency (the Newton tolerance is on r / s).
+  options.scale_frequency = drive_omega;
   options.gap_scale = kGapScaleFactor * sweep::HarmonicBalance(system, options).gap_scale();
   return options;
 }
@@ -406,7 +414,7 @@ SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const S
   // period-two branch from its first period doubling, both ways until it rejoins the period-one branch
   const sweep::HarmonicBalance hb(
       system, balance_options(system, switch_branch ? std::max(1, section.harmonics / 2) : section.harmonics,
-                              switch_branch ? 1 : section.subharmonic, section.solver));
+                              switch_branch ? 1 : section.subharmonic, section.solver, from));
   SweepResult result;
   BranchRecorder recorder(settings, result, progress);
   std::vector<sweep::BranchPoint> period_one;
@@ -415,13 +423,13 @@ SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const S
     return recorder(point);
   };
   sweep::continue_branch(hb, from, to, continuation, record);
-  add_completion(settings, result);
+  add_completion(settings, continuation.max_points, result);
   if (section.subharmonic == 2 && !section.stability) {
     result.warnings.push_back("subharmonic 2 without stability: no period doubling can be found, so the branch is the "
                               "period-one response (A1/2 = 0); set sweep.stability: true (frictionless contact)");
   }
   if (switch_branch) {
-    const sweep::HarmonicBalance two(system, balance_options(system, section.harmonics, 2, section.solver));
+    const sweep::HarmonicBalance two(system, balance_options(system, section.harmonics, 2, section.solver, from));
     const std::optional<sweep::Solution> start = period_two_start(system, hb, two, period_one, continuation);
     period_one.clear();
     if (!start) {

@@ -165,6 +165,10 @@ json finite_or_null(double value) { return std::isfinite(value) ? json(value) : 
 /// One sample's figures for a candidate.
 struct SampleFigures {
   bool responds = true;
+  /// A forward value the figures need is not finite although the drive responds (a period-one drive, or
+  /// a sub-harmonic one whose branch exists): its sweep did not reach the drive frequency. Counted as
+  /// not responding, and reported (plan.json `notes`, `per_sample[].missing`), never silently.
+  bool missing = false;
   MatrixX frequency_fisher;  ///< of the driven mode's bilinear frequency
   MatrixX sensor_fisher;     ///< of the sensor's ratios
   double z = 0.0;            ///< the largest detection statistic
@@ -659,6 +663,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
         if (!std::isfinite(v0)) {
           figures.sigmas.push_back(kNaN);
           figures.noise_sigmas.push_back(kNaN);
+          if (figures.responds) figures.missing = true;
           figures.responds = false;
           continue;
         }
@@ -672,6 +677,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
           row[static_cast<Eigen::Index>(j - 1)] = (v - v0) / h / sigma;
         }
         if (!row.allFinite()) {
+          if (figures.responds) figures.missing = true;
           figures.responds = false;
           continue;
         }
@@ -804,6 +810,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   }
   document["samples"] = sample_list;
   json ranked = json::array();
+  int missing_figures = 0;  // candidate samples with a missing forward value (SampleFigures::missing)
   for (std::size_t r = 0; r < order.size(); ++r) {
     const Candidate& c = candidates[order[r]];
     const DriveFrequency& drive = spec.frequencies[c.frequency];
@@ -846,7 +853,9 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
       values["f_bilinear"] = finite_or_null(figures.frequency_hz);
       sigmas["f_bilinear"] = finite_or_null(figures.frequency_sigma);
       noise_sigmas["f_bilinear"] = finite_or_null(spec.noise_frequency * figures.frequency_hz);
+      if (figures.missing) ++missing_figures;
       per.push_back({{"drive_hz", 0.5 * (range_a[a][0] + range_a[a][1])}, {"responds", figures.responds},
+                     {"missing", figures.missing},
                      {"log_det", finite_or_null(figures.responds ? log_det(figures.frequency_fisher + figures.sensor_fisher) : kNaN)},
                      {"z", figures.z}, {"values", values}, {"sigmas", sigmas},
                      {"noise_sigmas", noise_sigmas}});
@@ -855,6 +864,15 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
     ranked.push_back(entry);
   }
   document["candidates"] = ranked;
+  json notes = json::array();
+  if (missing_figures > 0) {
+    notes.push_back(std::to_string(missing_figures) +
+                    " candidate samples lack a forward value although their drive responds (a sweep did not reach "
+                    "its drive frequency; see the warnings in the case folders' sweep.json): counted as not "
+                    "responding (per_sample[].missing)");
+    log << "plan: warning: " << notes.back().get<std::string>() << "\n";
+  }
+  document["notes"] = notes;
   // the best set of 1..combine sensors for the best candidate's drive
   const Candidate& best = candidates[order.front()];
   std::vector<MatrixX> base_fisher;

@@ -20,6 +20,10 @@ namespace {
 
 using Complex = std::complex<double>;
 constexpr double kPi = 3.14159265358979323846;
+/// The automatic gap scale is at least this share of the linear gap response at the drive
+/// (HarmonicBalanceOptions::scale_frequency): a floor for loads the crack barely sees statically,
+/// small enough to leave the static scale in place wherever that one is not tiny.
+constexpr double kDynamicScaleShare = 0.1;
 
 /// Default N: a power of two >= 4H and >= 4096. A sample entering or leaving contact changes the
 /// Jacobian by about eps_N A / N; near a lightly damped resonance that jump alone can fold the
@@ -603,6 +607,12 @@ HarmonicBalance::HarmonicBalance(const reduced::ReducedSystem& system, const Har
     d.modal_receptance(0.0, dr, dd);
     const VectorX static_gap = system.pair_modes * (dr.real().asDiagonal() * system.load_modal) + system.load_residual;
     if (d.c > 0) s = std::max(s, static_gap.cwiseAbs().maxCoeff());
+    if (d.c > 0 && options.scale_frequency > 0.0) {
+      d.modal_receptance(options.scale_frequency, dr, dd);
+      const ComplexVectorX dynamic_gap = system.pair_modes.cast<Complex>() * dr.cwiseProduct(system.load_modal.cast<Complex>()) +
+                                         system.load_residual.cast<Complex>();
+      s = std::max(s, kDynamicScaleShare * dynamic_gap.cwiseAbs().maxCoeff());
+    }
     d.scale = s > 0.0 ? s : 1e-6;
   }
 }

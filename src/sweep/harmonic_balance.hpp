@@ -59,6 +59,11 @@ struct HarmonicBalanceOptions {
   int subharmonic = 1;       ///< nu: 1, or 2 for period-doubled branches
   int time_samples = 0;      ///< N samples per period for AFT; 0 = smallest power of two >= max(4H, 4096)
   double gap_scale = 0.0;    ///< scale of the gap unknowns [m]; 0 = automatic (max |g0|, static gap response)
+  /// Drive frequency Omega [rad/s] at which the automatic scale also looks at the linear gap response:
+  /// it is at least kDynamicScaleShare of it. A crack outboard of a point load sees almost no static
+  /// gap (no moment beyond the load in a cantilever), so the static scale alone is orders too small and
+  /// the continuation's arclength is all gap harmonics (thousands of points). 0: the static one only.
+  double scale_frequency = 0.0;
   double tolerance = 1e-10;  ///< Newton converged when the scaled residual max norm is below this
   int max_iterations = 50;   ///< Newton iterations per solve
   double top_share = 0.25;   ///< the "top harmonics" are k > (1 - top_share) H (at least k = H)

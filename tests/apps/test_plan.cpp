@@ -88,6 +88,10 @@ TEST(Plan, ASensorAtTheNodeOfTheDrivenModeRanksBelowOneOnTheCracksSide) {
   EXPECT_EQ(node_rank, last_responding) << "the node's sensor should rank last of the driven mode's";
   EXPECT_LT(node_ratio, 0.2 * smallest_other) << "A2/A1 at the node should be the smallest by far";
   EXPECT_GT(first_silent, last_responding) << "candidates without a response rank after all that respond";
+  // every forward value was there: no response was inferred from a sweep that stopped early
+  EXPECT_TRUE(plan["notes"].empty()) << plan["notes"].dump();
+  for (const json& c : plan["candidates"])
+    for (const json& s : c["per_sample"]) EXPECT_FALSE(s["missing"].get<bool>());
   // The cross-check: the sample's own sweep says there is no period-two branch.
   std::ifstream sweep_stream(dir / "out" / "samples" / "runs" / "cases" / "0001" / "sweep.json");
   const json sweep = json::parse(sweep_stream);
