@@ -278,7 +278,10 @@ std::vector<fs::path> run_forward_cases(const YAML::Node& base, const std::vecto
   study.output_dir = (folder / "runs").string();
   study.executable = runner.executable;
   study.jobs = runner.jobs;
-  study.modal_cache = false;  // every case has its own (moved) mesh
+  // Modal batches: every case has its own (moved) mesh, so a cache would only add a primer per case.
+  // Sweep batches: the cases of one crack (its drive points and frequencies) share one modal cache
+  // folder, so the modal stage and the reduction of a drive point are computed once for them.
+  study.modal_cache = command == "sweep";
   study.gnuplot = "";
   std::ostringstream quiet;
   const int code = study::run_study(study, progress ? log : quiet);

@@ -518,6 +518,18 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
     set.emplace_back("sweep.subharmonic", f.subharmonic() ? "2" : "1");
   };
 
+  // The drive frequencies highest first within each sample and drive point: the cases of one crack
+  // share a modal cache folder, and a reduction made for the highest frequency (the most modes) serves
+  // the lower ones from the cache (reduced::ReductionOptions::frequency_margin).
+  std::vector<std::size_t> freq_order(n_freq), freq_rank(n_freq);
+  for (std::size_t f = 0; f < n_freq; ++f) freq_order[f] = f;
+  const auto nominal_hz = [&](std::size_t f) {
+    const double hz = spec.frequencies[f].ratio * at(level_f_b[run_level], static_cast<std::size_t>(spec.frequencies[f].mode - 1));
+    return std::isfinite(hz) ? hz : 0.0;
+  };
+  std::stable_sort(freq_order.begin(), freq_order.end(), [&](std::size_t a, std::size_t b) { return nominal_hz(a) > nominal_hz(b); });
+  for (std::size_t i = 0; i < n_freq; ++i) freq_rank[freq_order[i]] = i;
+
   // ---- 2. a sweep about each drive frequency at every sample (crackle sweep: every sensor at once)
   YAML::Node base_a = YAML::Clone(base);
   base_a["sweep"]["frequency"] = YAML::Load("{from: {mode: 1, ratio: 1}, to: {mode: 1, ratio: 2}}");
@@ -525,7 +537,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   // the model error's levels (the middle of the prior at each refinement order) first, then the samples
   for (std::size_t s = 0; s < n_levels + n_samples; ++s)
     for (std::size_t p = 0; p < n_drives; ++p)
-      for (std::size_t f = 0; f < n_freq; ++f) {
+      for (const std::size_t f : freq_order) {
         const DriveFrequency& drive = spec.frequencies[f];
         const double half = drive.subharmonic() ? kSubharmonicHalfWidth : kNarrowHalfWidth;
         ForwardCase run = s < n_levels ? ForwardCase{middle, levels[n_levels - 1 - s], {}}
@@ -544,7 +556,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   const std::vector<fs::path> folders_a =
       identify::run_forward_cases(base_a, spec.prior, cases_a, "sweep", dir / "samples", runner, log, true);
   forward_runs += static_cast<int>(folders_a.size());
-  const auto index_a = [&](std::size_t s, std::size_t p, std::size_t f) { return (s * n_drives + p) * n_freq + f; };
+  const auto index_a = [&](std::size_t s, std::size_t p, std::size_t f) { return (s * n_drives + p) * n_freq + freq_rank[f]; };
   std::vector<SweepTable> tables_a;
   std::vector<std::array<double, 2>> range_a;
   for (const fs::path& folder : folders_a) {
@@ -559,7 +571,9 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   std::vector<std::array<double, 2>> level_ranges(range_a.begin(), range_a.begin() + static_cast<std::ptrdiff_t>(n_level_runs));
   tables_a.erase(tables_a.begin(), tables_a.begin() + static_cast<std::ptrdiff_t>(n_level_runs));
   range_a.erase(range_a.begin(), range_a.begin() + static_cast<std::ptrdiff_t>(n_level_runs));
-  const auto level_run = [&](std::size_t l, std::size_t p, std::size_t f) { return ((n_levels - 1 - l) * n_drives + p) * n_freq + f; };
+  const auto level_run = [&](std::size_t l, std::size_t p, std::size_t f) {
+    return ((n_levels - 1 - l) * n_drives + p) * n_freq + freq_rank[f];
+  };
   // the relative model error of a quantity of a sensor under drive p, frequency f
   const auto ratio_error = [&](const std::string& quantity, const std::string& sensor, std::size_t p, std::size_t f) {
     const int branch = spec.frequencies[f].subharmonic() ? 2 : 1;
@@ -574,7 +588,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   // the largest first harmonic over the sensors of each sample run (the reference of noise.floor)
   std::vector<double> largest_a1(tables_a.size(), 0.0);
   for (std::size_t a = 0; a < tables_a.size(); ++a) {
-    const std::size_t f = a % n_freq;
+    const std::size_t f = freq_order[a % n_freq];
     const double drive_hz = 0.5 * (range_a[a][0] + range_a[a][1]);
     for (std::size_t i = 0; i < n_sensors; ++i) {
       const double a1 = sweep_value(tables_a[a], "A1", sensor_name(i), drive_hz, spec.frequencies[f].subharmonic() ? 2 : 1);
@@ -590,7 +604,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   for (std::size_t s = 0; s < n_samples; ++s)
     for (std::size_t j = 1; j <= k; ++j)
       for (std::size_t p = 0; p < n_drives; ++p)
-        for (std::size_t f = 0; f < n_freq; ++f) {
+        for (const std::size_t f : freq_order) {
           const std::size_t a = index_a(s, p, f);
           const std::array<double, 2>& range = range_a[a];
           // A sub-harmonic drive without a stable period-two branch at the sample has no response:

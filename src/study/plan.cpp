@@ -637,6 +637,8 @@ StudyPlan plan_study(const std::string& text, const std::string& file) {
     // and the crack (all of it when the cases share one mesh, else just its gap).
     YAML::Node key_document = copy_of(document);
     key_document.remove("transient");
+    key_document.remove("spectrum");  // the primer drops them too: the uncracked modes do not read them
+    key_document.remove("sweep");
     if (key_document["modal"].IsMap()) key_document["modal"].remove("variants");
     if (plan.shares_grid_lines)
       key_document.remove("crack");

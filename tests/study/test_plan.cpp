@@ -336,6 +336,18 @@ TEST(StudyPlan, ModalCacheKeyIgnoresWhatTheUncrackedModesDoNotDependOn) {
   ASSERT_FALSE(runs.cases[0].primer_text.empty());
   EXPECT_EQ(scene::parse_scene(runs.cases[0].primer_text, "primer.yaml").modal.variants,
             std::vector<std::string>{"uncracked"});
+  // The spectrum and the sweep (the primer drops both) do not split the cache either: the sweeps of one
+  // crack at several drive frequencies share the modes and the reduction.
+  const StudyPlan windows = plan_study(run_scene + "study:\n  vary:\n    spectrum.harmonics: [3, 5]\n  outputs: [spectrum]\n",
+                                       "b.yaml");
+  EXPECT_EQ(windows.cases[0].modal_key, windows.cases[1].modal_key);
+  EXPECT_NE(windows.cases[0].hash, windows.cases[1].hash);
+  const StudyPlan sweeps = plan_study(run_scene + "sweep: {frequency: {from: 90, to: 110}, points: 10}\n"
+                                                  "study:\n  vary:\n    sweep.frequency.from: [80, 90]\n  outputs: [sweep]\n",
+                                      "b.yaml");
+  EXPECT_EQ(sweeps.cases[0].modal_key, sweeps.cases[1].modal_key);
+  EXPECT_NE(sweeps.cases[0].hash, sweeps.cases[1].hash);
+  EXPECT_EQ(sweeps.cases[0].modal_key, windows.cases[0].modal_key);
 }
 
 TEST(StudyPlan, YamlValuesAsJson) {
