@@ -28,6 +28,7 @@
 #include "core/errors.hpp"
 #include "core/interrupt.hpp"
 #include "identify/identify.hpp"
+#include "planning/planning.hpp"
 #include "mesh/mesh.hpp"
 #include "modal/eigensolver.hpp"
 #include "modal/modal.hpp"
@@ -568,6 +569,20 @@ PYBIND11_MODULE(_crackle, module) {
       },
       py::arg("path"), py::arg("output"), py::arg("executable"), py::arg("jobs") = 0, py::arg("map_cache") = "",
       py::arg("sink") = py::none());
+
+  module.def(
+      "plan",
+      [](const std::string& path, const std::string& output, const std::string& executable, int jobs,
+         const py::object& sink) {
+        planning::PlanOptions options;
+        options.scene_path = path;
+        options.output_dir = output;
+        options.executable = executable;
+        options.jobs = jobs;
+        nlohmann::json document = call_library(sink, [&](std::ostream& out) { return planning::run_plan(options, out); });
+        return document;
+      },
+      py::arg("path"), py::arg("output"), py::arg("executable"), py::arg("jobs") = 0, py::arg("sink") = py::none());
 
   module.def(
       "set_threads", [](int threads) { omp_set_num_threads(threads); }, py::arg("threads"),

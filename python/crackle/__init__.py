@@ -7,7 +7,7 @@
     curve.write("out")                    # the files `crackle sweep data/beam.yaml -o out` writes
 
 Every command runs the library functions of the command line (``crackle modal|run|sweep|study|
-identify``) with the GIL released; progress lines go to ``progress`` (a callable taking one line)
+identify|plan``) with the GIL released; progress lines go to ``progress`` (a callable taking one line)
 or, by default, to the logger ``crackle`` at INFO level. Ctrl-C (KeyboardInterrupt) stops a run
 within a fraction of a second and leaves no file behind. See docs/python.md.
 """
@@ -19,14 +19,14 @@ import shutil
 from . import _crackle
 from ._paths import CRACKLE_EXECUTABLE
 from .errors import CrackleError, IoError, SceneError, SolverError
-from .results import (IdentifyResult, Mesh, ModalResult, Result, RunResult, StudyResult, SweepResult,
+from .results import (IdentifyResult, Mesh, ModalResult, PlanResult, Result, RunResult, StudyResult, SweepResult,
                       private_folder, private_scene)
 from .scene import Scene
 
 __all__ = [
-    "Scene", "Mesh", "Result", "ModalResult", "RunResult", "SweepResult", "StudyResult", "IdentifyResult",
+    "Scene", "Mesh", "Result", "ModalResult", "RunResult", "SweepResult", "StudyResult", "IdentifyResult", "PlanResult",
     "CrackleError", "SceneError", "SolverError", "IoError",
-    "modal", "run", "sweep", "study", "identify", "parameters", "set_threads", "threads",
+    "modal", "run", "sweep", "study", "identify", "plan", "parameters", "set_threads", "threads",
     "set_petsc_options", "executable",
 ]
 
@@ -145,6 +145,14 @@ def study(scene, jobs=0, modal_cache=True, retry_failed=False, case_timeout=0.0,
                 raise KeyboardInterrupt("crackle study: interrupted")
             return code
         return _command(body, progress, lambda out, log, code: StudyResult(out, log, code))
+
+
+def plan(scene, jobs=0, progress=None):
+    """``crackle plan``: sensors, drive points and frequencies ranked for the prior (crackle.PlanResult)."""
+    scene = _scene(scene)
+    with private_scene(scene, with_overrides=True) as (path, _):
+        return _command(lambda out, sink: _crackle.plan(path, out, executable(), int(jobs), sink),
+                        progress, lambda out, log, document: PlanResult(out, log, document))
 
 
 def identify(scene, jobs=0, map_cache="", progress=None):

@@ -307,3 +307,36 @@ class IdentifyResult(Result):
         if not self.json:
             self.json = document
         self.map = self.read_csv("identify_map.csv") if "identify_map.csv" in self.files else {}
+
+
+class PlanResult(Result):
+    """``crackle plan``: ``json`` is plan.json; ``sensors`` the candidate sensors' points (n x 3, m) in
+    the order of the scene's grid or list; ``candidates`` the ranked candidates as NumPy columns:
+    ``rank``, ``sensor`` (index into ``sensors``), ``drive_point`` (n x 3, m), ``drive_mode``,
+    ``drive_ratio``, ``responds`` (bool), ``log_det`` (NaN where it does not respond)."""
+
+    main_document = "plan.json"
+
+    def __init__(self, folder, log, document):
+        super().__init__(folder, log)
+        if not self.json:
+            self.json = document
+        ranked = self.json.get("candidates", [])
+        names = {}
+        points = []
+        for candidate in sorted(ranked, key=lambda c: int(c["sensor"]["name"].lstrip("s"))):
+            name = candidate["sensor"]["name"]
+            if name not in names:
+                names[name] = len(points)
+                points.append(candidate["sensor"]["point"])
+        self.sensors = np.array(points, dtype=float).reshape(-1, 3)
+        number = lambda value: np.nan if value is None else float(value)
+        self.candidates = {
+            "rank": np.array([c["rank"] for c in ranked], dtype=int),
+            "sensor": np.array([names[c["sensor"]["name"]] for c in ranked], dtype=int),
+            "drive_point": np.array([c["drive"]["point"] for c in ranked], dtype=float).reshape(-1, 3),
+            "drive_mode": np.array([c["drive"]["mode"] for c in ranked], dtype=int),
+            "drive_ratio": np.array([c["drive"]["ratio"] for c in ranked], dtype=float),
+            "responds": np.array([bool(c["responds"]) for c in ranked], dtype=bool),
+            "log_det": np.array([number(c["log_det"]) for c in ranked], dtype=float),
+        }

@@ -1,8 +1,8 @@
 """For every scene of data/: result.write(d) gives the files `crackle` writes, to 1e-12.
 
 Each case is shortened with the same overrides on both sides (--set for the command line,
-Scene.set here), as the example tests of tests/apps shorten them; study and identify, which take
-no --set, read one shortened scene file on both sides."""
+Scene.set here), as the example tests of tests/apps shorten them; study, identify and plan, which
+take no --set, read one shortened scene file on both sides."""
 import glob
 import json
 import os
@@ -25,8 +25,12 @@ CASES = [
                                      ("transient.model", "reduced"), ("spectrum.plots", "false")] + SHORT_RUN),
     ("gmsh-cracked-box.yaml", "run", [("transient.model", "reduced")] + SHORT_RUN),
     ("pluck.yaml", "run", [("transient.duration", "0.05")]),
-    # crackle plan has no Python function yet: the scene's own transient run.
     ("plan-beam.yaml", "run", SHORT_RUN),
+    # A plan of one drive and frequency, 2 samples per key, 5 sensors on a p = 1 mesh: 30 forward runs.
+    ("plan-beam.yaml", "plan", [("cells: [20, 2, 2]", "cells: [10, 1, 2]"), ("order: 2", "order: 1"),
+                                ("samples: 3", "samples: 2"), ("spacing: 0.01}", "spacing: 0.05}"),
+                                ("[[0.2, 0.01, 0.01], [0.1, 0.01, 0.01]]", "[[0.2, 0.01, 0.01]]"),
+                                (", {mode: 1, ratio: 0.333}, {mode: 1, ratio: 2.0}, {mode: 3, ratio: 0.5}", "")]),
     ("subharmonic.yaml", "run", SHORT_RUN),
     ("subharmonic.yaml", "sweep", [("sweep.points", "20"), ("sweep.harmonics", "8")]),
     ("depth-study.yaml", "study", [("steps: 5", "steps: 2"), ("periods: 60", "periods: 2"),
@@ -69,7 +73,7 @@ def case_id(case):
 @pytest.mark.parametrize("name,command,overrides", CASES, ids=[case_id(case) for case in CASES])
 def test_write_gives_the_command_line_files(name, command, overrides, tmp_path):
     cli_out, python_out = str(tmp_path / "cli"), str(tmp_path / "python")
-    if command in ("study", "identify"):
+    if command in ("study", "identify", "plan"):
         path = shortened_copy(name, overrides, str(tmp_path))
         crackle_cli([command, path, "-o", cli_out, "-j", "2"])
         scene = crackle.Scene(path)
@@ -89,3 +93,11 @@ def test_write_gives_the_command_line_files(name, command, overrides, tmp_path):
     with open(os.path.join(python_out, result.main_document)) as file:
         written = json.load(file)
     assert json.loads(json.dumps(result.json).replace(result.folder, python_out)) == written
+    if command == "plan":
+        # the NumPy view of plan.json: one row per ranked candidate, sensors by their index
+        ranked = written["candidates"]
+        assert list(result.candidates["rank"]) == [c["rank"] for c in ranked]
+        assert result.sensors.shape == (len({c["sensor"]["name"] for c in ranked}), 3)
+        for row, candidate in enumerate(ranked):
+            assert list(result.sensors[result.candidates["sensor"][row]]) == candidate["sensor"]["point"]
+            assert result.candidates["responds"][row] == candidate["responds"]
