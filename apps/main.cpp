@@ -198,6 +198,9 @@ int main(int argc, char** argv) {
   check_command->add_option("scene", check.scene_path, "Scene file (YAML)")->required();
   check_command->add_option("--set", check.overrides, "Override a scene value: --set key.path=value (repeatable)");
   check_command->add_flag("!--no-assembly", check.assemble, "Skip assembling K and M");
+  bool check_quiet = false;
+  check_command->add_flag("-q,--quiet", check_quiet, "Print no summary: the exit code says whether the scene is valid "
+                                                     "(errors are still printed)");
 
   pipeline::ModalCommandOptions modal;
   std::vector<std::string> modal_petsc;
@@ -215,6 +218,9 @@ int main(int argc, char** argv) {
                             "Folder where the modal solves (by fingerprint of K and M) and the reduced model are looked up and stored (shared by study cases)");
   modal_command->add_flag("--overwrite", modal.overwrite,
                           "Write into a folder that holds files crackle modal did not write (they are kept)");
+  bool modal_quiet = false;
+  modal_command->add_flag("-q,--quiet", modal_quiet, "Print no table of frequencies (the files hold it; errors are "
+                                                     "still printed)");
   modal_command->add_option("--petsc", modal_petsc, "PETSc/SLEPc options, e.g. --petsc \"-eps_view\" (repeatable)");
   modal_command->footer(kPetscChannel);
 
@@ -266,6 +272,9 @@ int main(int argc, char** argv) {
       ->check(above(0, true, "a positive integer"));
   study_command->add_flag("--retry-failed", study_options.retry_failed, "Rerun cases recorded as failed");
   study_command->add_flag("--no-modal-cache", no_modal_cache, "Solve the modes (and the reduced model) in every case");
+  bool study_quiet = false;
+  study_command->add_flag("-q,--quiet", study_quiet, "No progress lines (cases done, running, ETA); the plan, notes, "
+                                                     "the summary and errors are still printed");
   study_command->add_option("--case-timeout", study_options.case_timeout_s,
                             "Stop a case after this many seconds (default: no limit)")
       ->check(above(0, false, "a positive number of seconds"));
@@ -283,6 +292,9 @@ int main(int argc, char** argv) {
       ->check(above(0, true, "a positive integer"));
   identify_command->add_option("--map-cache", identify_options.map_cache,
                                "Folder of the map's forward runs, kept for the next measurement set of the same design");
+  bool identify_quiet = false;
+  identify_command->add_flag("-q,--quiet", identify_quiet, "No progress lines of the forward runs; the stages, the "
+                                                           "estimate, notes and errors are still printed");
 
   planning::PlanOptions plan_options;
   plan_options.executable = "/proc/self/exe";
@@ -295,6 +307,9 @@ int main(int argc, char** argv) {
   plan_command->add_option("-o,--output", plan_options.output_dir, "Output directory")->required();
   plan_command->add_option("-j,--jobs", plan_options.jobs, "Forward runs at a time (default: the cores)")
       ->check(above(0, true, "a positive integer"));
+  bool plan_quiet = false;
+  plan_command->add_flag("-q,--quiet", plan_quiet, "No progress lines of the forward runs; the stages, the best "
+                                                   "test, warnings and errors are still printed");
 
   CLI::App* format_command =
       cli.add_subcommand("scene-format", "Print the reference of every scene key (Markdown)");
@@ -344,11 +359,12 @@ int main(int argc, char** argv) {
 
   bool quiet_rank = false;  // a rank of crackle run under mpirun other than 0: its errors are rank 0's
   try {
-    if (*check_command) pipeline::run_check(check, std::cout);
+    std::ostream discard(nullptr);  // what -q leaves unprinted
+    if (*check_command) pipeline::run_check(check, check_quiet ? discard : std::cout);
     if (*modal_command) {
       PetscArguments petsc(arguments.own.front(), modal_petsc, arguments.petsc);
       modal::SlepcSession session(petsc.argc(), petsc.argv());
-      pipeline::run_modal_command(modal, std::cout);
+      pipeline::run_modal_command(modal, modal_quiet ? discard : std::cout);
     }
     if (*run_command) {
       run.progress = !quiet;
@@ -372,10 +388,17 @@ int main(int argc, char** argv) {
     }
     if (*study_command) {
       study_options.modal_cache = !no_modal_cache;
+      study_options.progress = !study_quiet;
       return study::run_study(study_options, std::cerr);
     }
-    if (*identify_command) identify::run_identify(identify_options, std::cerr);
-    if (*plan_command) planning::run_plan(plan_options, std::cerr);
+    if (*identify_command) {
+      identify_options.progress = !identify_quiet;
+      identify::run_identify(identify_options, std::cerr);
+    }
+    if (*plan_command) {
+      plan_options.progress = !plan_quiet;
+      planning::run_plan(plan_options, std::cerr);
+    }
     if (*format_command) std::cout << scene::scene_format_markdown();
   } catch (const std::bad_alloc&) {
     if (quiet_rank) return kExitOutOfMemory;

@@ -239,6 +239,9 @@ std::vector<fs::path> run_forward_cases(const YAML::Node& base, const std::vecto
     std::map<std::string, YAML::Node> lists;
     for (std::size_t j = 0; j < unknowns.size(); ++j) {
       const Unknown& u = unknowns[j];
+      // A key the batch's command never reads (transient.damping.ratio in a modal batch) is not set:
+      // the study refuses to vary it, and the runs are the same without it.
+      if (!study::output_reads(command == "modal" ? "modal" : command == "run" ? "spectrum" : "sweep", u.path)) continue;
       const double value = run.theta[static_cast<Eigen::Index>(j)];
       if (u.index < 0) {
         add(u.path, format_number(value), c);

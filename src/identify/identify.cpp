@@ -196,7 +196,8 @@ class Forward {
       }
     }
     const std::vector<fs::path> folders = run_forward_cases(document, spec_.unknowns, cases, drives.empty() ? "modal" : "sweep",
-                                                            folder, {options_.executable, options_.jobs}, log_, progress);
+                                                            folder, {options_.executable, options_.jobs}, log_,
+                                                            progress && options_.progress);
     runs_ += static_cast<int>(folders.size());
     return folders;
   }

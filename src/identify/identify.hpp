@@ -85,6 +85,7 @@ struct IdentifyOptions {
   std::string executable;  ///< crackle executable for the forward runs (/proc/self/exe)
   int jobs = 0;            ///< forward runs at a time; 0: the cores
   std::string map_cache;   ///< folder of the map's forward runs (kept between measurement sets)
+  bool progress = true;    ///< the forward runs' progress lines (the study's case counts)
 };
 
 /// Runs the identification; progress to `log`. Returns the identify.json document.

@@ -9,6 +9,7 @@
 #include "pipeline/limits.hpp"
 #include "mesh/box.hpp"
 #include "pipeline/model.hpp"
+#include "pipeline/placement.hpp"
 #include "scene/scene.hpp"
 
 namespace crackle::pipeline {
@@ -16,8 +17,9 @@ namespace crackle::pipeline {
 void run_check(const CheckOptions& options, std::ostream& out) {
   Stopwatch clock;
   const scene::Scene scene = scene::load_scene(options.scene_path, parse_overrides(options.overrides));
-  check_memory(scene, options.assemble ? matrices::stiffness : matrices::none);
+  check_memory(scene, options.assemble ? matrices::stiffness : matrices::none, MeshUse::modal);
   const Model model = build_model(scene, MeshUse::modal);
+  check_points(scene, model);  // every refusal crackle run makes for a probe or a load point
   const double mesh_seconds = clock.seconds();
   const mesh::Mesh& mesh = model.mesh;
 

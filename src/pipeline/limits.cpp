@@ -3,6 +3,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -11,10 +12,15 @@
 #include "core/errors.hpp"
 #include "core/resources.hpp"
 #include "io/files.hpp"
+#include "pipeline/model.hpp"
 #include "sweep/harmonic_balance.hpp"
 
 namespace crackle::pipeline {
 namespace {
+
+/// Most cells along an axis for which estimate_mesh lists the grid lines (a million lines are 8 MB;
+/// a box of even 1e4 cells along each of three axes is far beyond any memory).
+constexpr int kListedCells = 1000000;
 
 std::string number_text(double value) {
   if (value < 1e6) return format_number(std::round(value));
@@ -25,7 +31,7 @@ std::string number_text(double value) {
 
 }  // namespace
 
-MeshEstimate estimate_mesh(const scene::Scene& scene) {
+MeshEstimate estimate_mesh(const scene::Scene& scene, MeshUse use) {
   MeshEstimate estimate;
   if (!scene.gmsh_file.empty()) {
     std::error_code error;
@@ -34,14 +40,25 @@ MeshEstimate estimate_mesh(const scene::Scene& scene) {
     return estimate;
   }
   const double p = scene.box.order;
+  // The grid lines the mesher will use (grading layers towards the crack front included, which can
+  // multiply the cells several times), when there are few enough to list; else the cells requested,
+  // which is already far more than fits.
+  std::array<double, 3>& cells = estimate.cells;
+  if (*std::max_element(scene.box.cells.begin(), scene.box.cells.end()) <= kListedCells) {
+    const std::array<std::vector<double>, 3> lines = box_lines(scene, use);
+    for (int axis = 0; axis < 3; ++axis) cells[axis] = static_cast<double>(lines[axis].size()) - 1.0;
+  } else {
+    for (int axis = 0; axis < 3; ++axis) {
+      // Grid lines added for the crack edges and `mesh.box.lines` make a few more cells.
+      cells[axis] = static_cast<double>(scene.box.cells[axis]) +
+                    static_cast<double>(scene.box.extra_lines[axis].size()) + (scene.crack ? 2.0 : 0.0);
+    }
+  }
   estimate.nodes = 1.0;
   estimate.elements = 1.0;
   for (int axis = 0; axis < 3; ++axis) {
-    // Grid lines added for the crack edges and `mesh.box.lines` make a few more cells.
-    const double cells = static_cast<double>(scene.box.cells[axis]) + static_cast<double>(scene.box.extra_lines[axis].size()) +
-                         (scene.crack ? 2.0 : 0.0);
-    estimate.nodes *= cells * p + 1.0;
-    estimate.elements *= cells;
+    estimate.nodes *= cells[axis] * p + 1.0;
+    estimate.elements *= cells[axis];
   }
   estimate.nodes_per_element = (p + 1.0) * (p + 1.0) * (p + 1.0);
   estimate.dofs = 3.0 * estimate.nodes;
@@ -61,8 +78,8 @@ double estimate_memory_bytes(const scene::Scene& scene, const MeshEstimate& mesh
   return bytes;
 }
 
-void check_memory(const scene::Scene& scene, int matrices) {
-  const MeshEstimate mesh = estimate_mesh(scene);
+void check_memory(const scene::Scene& scene, int matrices, MeshUse use) {
+  const MeshEstimate mesh = estimate_mesh(scene, use);
   const double needed = estimate_memory_bytes(scene, mesh, matrices);
   std::string source;
   const double available = available_memory_bytes(&source);
@@ -73,12 +90,17 @@ void check_memory(const scene::Scene& scene, int matrices) {
                      source + ")");
   }
   const auto& cells = scene.box.cells;
+  std::string graded;  // the lines the crack's edges and the grading layers add, when they add many
+  if (mesh.cells[0] * mesh.cells[1] * mesh.cells[2] > 1.5 * cells[0] * cells[1] * cells[2]) {
+    graded = " (" + number_text(mesh.cells[0]) + " x " + number_text(mesh.cells[1]) + " x " +
+             number_text(mesh.cells[2]) + " with the crack's lines and the grading layers of mesh.box.grading)";
+  }
   const std::string matrix_text = matrices == 1  ? ", K"
                                   : matrices > 1 ? ", " + std::to_string(matrices) + " sparse matrices of K's size"
                                                  : "";
   throw InputError(scene.where("mesh.box.cells") + ": expected a mesh that fits in memory, got [" +
                    std::to_string(cells[0]) + ", " + std::to_string(cells[1]) + ", " + std::to_string(cells[2]) +
-                   "] cells of order " + std::to_string(scene.box.order) + ": about " + number_text(mesh.nodes) +
+                   "] cells of order " + std::to_string(scene.box.order) + graded + ": about " + number_text(mesh.nodes) +
                    " nodes, " + number_text(mesh.elements) + " elements, " + number_text(mesh.dofs) +
                    " DOFs, which need at least " + bytes_text(needed) + " for the mesh" + matrix_text +
                    " and the vectors, more than the " + bytes_text(available) + " available (" + source + ")");

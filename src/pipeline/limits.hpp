@@ -3,10 +3,12 @@
 /// that cannot fit is refused in a second with the key to change (and not ended by std::bad_alloc
 /// after minutes). The estimates are lower bounds: what the mesh, the operators and the outputs
 /// need at least, not counting the solvers' own workspace (factorisations, Krylov bases).
+#include <array>
 #include <filesystem>
 #include <string>
 
 #include "core/resources.hpp"
+#include "pipeline/model.hpp"
 #include "scene/scene.hpp"
 
 namespace crackle::pipeline {
@@ -19,8 +21,12 @@ struct MeshEstimate {
   double dofs = 0.0;
   double nodes_per_element = 8.0;
   double file_bytes = 0.0;  ///< a Gmsh mesh file's size, 0 for a box
+  std::array<double, 3> cells{};  ///< cells per axis of a box: its grid lines less one
 };
-MeshEstimate estimate_mesh(const scene::Scene& scene);
+
+/// The mesh build_model(scene, use) makes: a box's grid lines as the mesher places them (crack
+/// edges, mesh.box.lines, material regions and the grading layers of `use`).
+MeshEstimate estimate_mesh(const scene::Scene& scene, MeshUse use = MeshUse::transient);
 
 /// Sparse matrices of K's size [count] a command holds at once besides the mesh and vectors.
 namespace matrices {
@@ -37,7 +43,7 @@ double estimate_memory_bytes(const scene::Scene& scene, const MeshEstimate& mesh
 
 /// Refuses (InputError naming the mesh key, the estimate and the memory available) a scene whose
 /// mesh and operators cannot fit in memory. Call before build_model.
-void check_memory(const scene::Scene& scene, int matrices);
+void check_memory(const scene::Scene& scene, int matrices, MeshUse use = MeshUse::transient);
 
 /// Refuses (InputError naming sweep.harmonics) a harmonic-balance sweep whose solver cannot fit in
 /// memory with `rows` pair rows and `modes` modes (sweep::HarmonicBalance::memory_bytes, the dense or

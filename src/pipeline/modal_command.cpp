@@ -30,7 +30,7 @@ void run_modal_command(const ModalCommandOptions& options, std::ostream& out, co
   if (!options.solver.empty()) section.solver = options.solver;
   const bool writer = modal::is_output_rank();
   // Fail on an unwritable or foreign output directory, or a mesh too big for the memory, before the solve.
-  check_memory(scene, matrices::eigen_solve);
+  check_memory(scene, matrices::eigen_solve, MeshUse::modal);
   std::optional<OutputFolder> folder;
   if (writer) folder.emplace(options.output_directory, "modal", options.scene_path, options.overwrite, std::cerr);
   try {

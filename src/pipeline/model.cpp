@@ -166,7 +166,7 @@ contact::ContactOptions scene_contact_options(const scene::Scene& scene) {
 }
 
 Model build_model(const scene::Scene& scene, MeshUse use) {
-  check_memory(scene, matrices::none);
+  check_memory(scene, matrices::none, use);
   Model model;
   if (!scene.gmsh_file.empty()) {
     mesh::GmshOptions options;

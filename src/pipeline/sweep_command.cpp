@@ -10,6 +10,7 @@
 #include "io/files.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/limits.hpp"
+#include "pipeline/placement.hpp"
 #include "pipeline/reduced_model.hpp"
 #include "pipeline/stages.hpp"
 #include "pipeline/sweep.hpp"
@@ -95,6 +96,7 @@ void run_sweep_command(const SweepCommandOptions& options, std::ostream& out, st
   check_memory(scene, matrices::eigen_solve);
   io::ensure_directory(directory);
   const Model model = build_model(scene, MeshUse::transient);
+  check_points(scene, model);  // a probe outside the body is refused, not read at its nearest node
   Stage modal_stage{"modal", false, "", 0.0};
   const std::optional<modal::ModalResult> modes =
       run_modal_stage(scene, model, directory, options.modal_cache, modal_stage, out);

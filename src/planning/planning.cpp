@@ -493,7 +493,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   for (std::size_t l = n_levels; l-- > 0;) modal_cases.push_back({middle, levels[l], {}});
   for (const VectorX& point : points) modal_cases.push_back({point, order_run, {}});
   const std::vector<fs::path> modal_folders =
-      identify::run_forward_cases(base, spec.prior, modal_cases, "modal", dir / "modal", runner, log, true);
+      identify::run_forward_cases(base, spec.prior, modal_cases, "modal", dir / "modal", runner, log, options.progress);
   forward_runs += static_cast<int>(modal_folders.size());
   std::vector<std::vector<double>> f_u(points.size()), f_b(points.size()), level_f_b(n_levels);
   for (std::size_t c = 0; c < modal_folders.size(); ++c) {
@@ -554,7 +554,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   log << "plan: 2. sweeps at the samples: " << cases_a.size() << " runs (" << n_levels * n_drives * n_freq
       << " of them for the model error)\n";
   const std::vector<fs::path> folders_a =
-      identify::run_forward_cases(base_a, spec.prior, cases_a, "sweep", dir / "samples", runner, log, true);
+      identify::run_forward_cases(base_a, spec.prior, cases_a, "sweep", dir / "samples", runner, log, options.progress);
   forward_runs += static_cast<int>(folders_a.size());
   const auto index_a = [&](std::size_t s, std::size_t p, std::size_t f) { return (s * n_drives + p) * n_freq + freq_rank[f]; };
   std::vector<SweepTable> tables_a;
@@ -621,7 +621,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
         }
   log << "plan: 3. sweeps at the Jacobian points: " << cases_b.size() << " runs\n";
   const std::vector<fs::path> folders_b =
-      identify::run_forward_cases(base_b, spec.prior, cases_b, "sweep", dir / "jacobian", runner, log, true);
+      identify::run_forward_cases(base_b, spec.prior, cases_b, "sweep", dir / "jacobian", runner, log, options.progress);
   forward_runs += static_cast<int>(folders_b.size());
   std::vector<SweepTable> tables_b;
   for (const fs::path& folder : folders_b) tables_b.push_back(identify::read_sweep_csv(folder / "sweep.csv"));

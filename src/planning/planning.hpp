@@ -81,6 +81,7 @@ struct PlanOptions {
   std::string output_dir;
   std::string executable;  ///< crackle executable for the forward runs (/proc/self/exe)
   int jobs = 0;            ///< forward runs at a time; 0: the cores
+  bool progress = true;    ///< the forward runs' progress lines (the study's case counts)
 };
 
 /// Runs the plan; progress to `log`. Returns the plan.json document.

@@ -38,6 +38,11 @@ using scene::suggestion;
 
 using scene::mark_line;
 
+/// The command a study output runs.
+std::string command_of(const std::string& output) {
+  return output == "modal" ? "modal" : output == "spectrum" ? "run" : "sweep";
+}
+
 [[noreturn]] void fail(const std::string& file, int line, const std::string& path,
                        const std::string& expected, const std::string& got) {
   scene::fail(file, line, path, expected, got);
@@ -440,6 +445,18 @@ StudySpec parse_study_section(const std::string& text, const std::string& file) 
     spec.vary.push_back(key);
   }
 
+  for (const VariedKey& key : spec.vary) {
+    if (std::any_of(spec.outputs.begin(), spec.outputs.end(),
+                    [&](const std::string& output) { return output_reads(output, key.path); }))
+      continue;
+    fail(file, key.line, "study.vary." + key.path,
+         "a key that an output of study.outputs (" + join(spec.outputs) + ") reads",
+         "'" + key.path + "', which " + (spec.outputs.size() == 1 ? "crackle " + command_of(spec.outputs.front()) + " never"
+                                                                  : std::string("none of their commands")) +
+             " reads (every case would be the same run); add the output that uses it to study.outputs "
+             "(spectrum: crackle run, sweep: crackle sweep) or vary another key");
+  }
+
   if (spec.mode == StudyMode::zip) {
     for (const VariedKey& key : spec.vary) {
       if (key.values.size() != spec.vary.front().values.size()) {
@@ -451,6 +468,14 @@ StudySpec parse_study_section(const std::string& text, const std::string& file) 
     }
   }
   return spec;
+}
+
+bool output_reads(const std::string& output, const std::string& path) {
+  const std::string section = path.substr(0, path.find_first_of(".["));
+  if (section == "study" || section == "identify" || section == "plan") return false;
+  if (output == "modal") return section != "transient" && section != "spectrum" && section != "sweep";
+  if (output == "spectrum") return section != "sweep";
+  return true;
 }
 
 std::vector<std::vector<double>> shared_crack_lines(const std::vector<scene::Scene>& scenes) {

@@ -40,6 +40,12 @@ struct StudySpec {
   int line = -1;                                 ///< line of `study:`; -1 when absent
 };
 
+/// Whether the command of a study output (modal: crackle modal, spectrum: crackle run, sweep: crackle
+/// sweep) can read the scene key `path`: crackle modal reads no key of transient:, spectrum: or
+/// sweep:, crackle run none of sweep:, and no command reads study:, identify: or plan:. A study
+/// that varies a key none of its outputs reads is refused (every case would be the same run).
+bool output_reads(const std::string& output, const std::string& path);
+
 /// One case: the base scene with overrides applied.
 struct StudyCase {
   int index = 0;

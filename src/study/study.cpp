@@ -441,7 +441,7 @@ int StudyRun::stop_all() {
 }
 
 void StudyRun::progress(bool force) {
-  if (!force && n_done_ == last_reported_) return;
+  if (!options_.progress || (!force && n_done_ == last_reported_)) return;
   last_reported_ = n_done_;
   // Rank 0 counts every case; the other ranks their own.
   const int total = rank_ == 0 ? static_cast<int>(plan_.cases.size()) : own_total_;

@@ -31,6 +31,7 @@ struct StudyOptions {
   int jobs = 0;               ///< cases at a time per rank; 0: the cores (shared among the node's ranks)
   bool modal_cache = true;    ///< pass --modal-cache to the case commands and prime each key once
   bool retry_failed = false;  ///< rerun cases recorded as failed
+  bool progress = true;       ///< the progress lines (cases done, running, ETA) on the log
   double case_timeout_s = 0;  ///< stop a case after this long (recorded as failed); 0: no limit
   /// OMP_NUM_THREADS of the case processes when the environment does not set it; 0: leave unset.
   int threads_per_case = 1;

@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 namespace fs = std::filesystem;
@@ -104,6 +105,43 @@ TEST(CliEdges, HelpAndVersionExitZeroAndDocumentTheChannels) {
     EXPECT_NE(result.output.find("PETSc/SLEPc options go after --"), std::string::npos) << result.output;
   }
   EXPECT_EQ(crackle("study --help").exit_code, 0);
+}
+
+TEST(CliEdges, QuietIsCommonToEveryCommandThatComputes) {
+  for (const std::string command : {"check", "modal", "run", "sweep", "study", "identify", "plan"}) {
+    const Result help = crackle(command + " --help");
+    EXPECT_EQ(help.exit_code, 0) << command;
+    EXPECT_NE(help.output.find("-q,--quiet"), std::string::npos) << command << ": " << help.output;
+  }
+  const fs::path scene = small_scene();
+  const fs::path out = fs::temp_directory_path() / ("crackle-cli-edges-quiet-" + std::to_string(::getpid()));
+  const Result loud = crackle("check " + scene.string());
+  ASSERT_EQ(loud.exit_code, 0) << loud.output;
+  EXPECT_NE(loud.output.find("dofs"), std::string::npos) << loud.output;
+  const Result check = crackle("check -q " + scene.string());
+  EXPECT_EQ(check.exit_code, 0);
+  EXPECT_EQ(check.output, "");  // the exit code says it
+  const Result bad = crackle("check -q " + scene.string() + " --set material.nu=0.7");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.output.find("crackle: error: "), std::string::npos) << bad.output;  // errors still printed
+  const Result modal = crackle("modal -q " + scene.string() + " -o " + out.string());
+  EXPECT_EQ(modal.exit_code, 0) << modal.output;
+  EXPECT_EQ(modal.output, "");
+  EXPECT_TRUE(fs::exists(out / "modal.json"));  // the table is in the files
+  // A study: no progress lines, the plan and the summary still said.
+  const fs::path study = fs::temp_directory_path() / ("crackle-cli-edges-study-" + std::to_string(::getpid()) + ".yaml");
+  std::ifstream in(scene);
+  std::ofstream(study) << std::string(std::istreambuf_iterator<char>(in), {})
+                       << "study:\n  vary:\n    material.E: [200.0e9, 210.0e9]\n";
+  const Result loud_study = crackle("study " + study.string() + " -o " + (out / "loud").string() + " -j 1");
+  EXPECT_EQ(loud_study.exit_code, 0) << loud_study.output;
+  EXPECT_NE(loud_study.output.find("cases done"), std::string::npos) << loud_study.output;
+  const Result quiet_study = crackle("study -q " + study.string() + " -o " + (out / "quiet").string() + " -j 1");
+  EXPECT_EQ(quiet_study.exit_code, 0) << quiet_study.output;
+  EXPECT_EQ(quiet_study.output.find("cases done"), std::string::npos) << quiet_study.output;
+  EXPECT_NE(quiet_study.output.find("study: 2 cases, 2 ok, 0 failed"), std::string::npos) << quiet_study.output;
+  fs::remove_all(out);
+  fs::remove(study);
 }
 
 TEST(CliEdges, PetscOptionsPassAfterTheSeparatorOrWithPetsc) {

@@ -90,6 +90,46 @@ TEST(RunEdges, MeshesThatCannotFitInMemoryAreRefusedBeforeMeshing) {
       << from_file.output;
 }
 
+TEST(RunEdges, AGradedMeshIsCountedWithItsLayersBeforeMeshing) {
+  // The issue's aluminium cantilever: [50, 5, 3] cells of order 4 graded towards the front make 58 x 5 x
+  // 12 cells, 720k DOFs: about 21 GiB for the modal stage's matrices. Counting the cells requested
+  // and two per crack edge (52 x 7 x 5, 382k DOFs) said 11.1 GiB, the run went on and the kernel
+  // killed it at 24 GB. Under a 12 GB address-space limit it is refused in a second with the key,
+  // the graded cells and the figure.
+  const std::string text = R"(mesh:
+  box: {size: [0.25, 0.025, 0.012], cells: [50, 5, 3], order: 4, grading: always}
+material: {E: 70.0e9, nu: 0.33, rho: 2700.0}
+boundary:
+  - {face: x-, fix: [x, y, z]}
+crack:
+  plane: {normal: x, at: 0.06}
+  region: {y: [0.0, 0.025], z: [0.006, 0.012]}
+transient:
+  model: reduced
+  excitation: {face: x+, direction: z, amplitude: 20.0, frequency: {mode: 1, ratio: 0.5}}
+  damping: {ratio: 0.05, at: {mode: 1}}
+  periods: 60
+  probes:
+    - {name: tip, point: [0.25, 0.0125, 0.012]}
+spectrum: {harmonics: 5}
+)";
+  const fs::path scene = scene_file("aluminium.yaml", text);
+  const Result result =
+      crackle("run " + scene.string() + " -q -o " + (scratch() / "graded").string(), "ulimit -v 12000000;");
+  EXPECT_EQ(result.exit_code, 2) << result.output;
+  EXPECT_NE(result.output.find("aluminium.yaml:2: mesh.box.cells: expected a mesh that fits in memory, got [50, 5, 3] "
+                               "cells of order 4 (58 x 5 x 12 with the crack's lines and the grading layers of "
+                               "mesh.box.grading): about 239757 nodes"),
+            std::string::npos)
+      << result.output;
+  EXPECT_FALSE(fs::exists(scratch() / "graded"));
+  // The estimate is the mesh: crackle check counts the same nodes (the crack's copies besides).
+  const Result checked = crackle("check " + scene.string() + " --no-assembly");
+  ASSERT_EQ(checked.exit_code, 0) << checked.output;
+  EXPECT_NE(checked.output.find("nodes        240261 (239757 + 504 crack-face copies)"), std::string::npos)
+      << checked.output;
+}
+
 TEST(RunEdges, DevicesAsMeshFilesAndTooManySnapshotsAreRefused) {
   const Result device = crackle("check " + scene_file().string() + " --set 'mesh={gmsh: /dev/zero}'");
   EXPECT_EQ(device.exit_code, 2) << device.output;
@@ -117,6 +157,25 @@ TEST(RunEdges, PointsOutsideTheBodyAreRefusedAndSnappingDistancesReported) {
   EXPECT_EQ(load.exit_code, 2) << load.output;
   EXPECT_NE(load.output.find("transient.excitation.point: expected a point in the body"), std::string::npos)
       << load.output;
+  // crackle check makes the same refusals (before anything is assembled), and so does crackle sweep
+  // (which would otherwise read the probe at its nearest node).
+  for (const std::string set : {"'transient.probes[0].point=[10,10,10]'",
+                                "'transient.excitation={point: [0.2, 0.01, 0.5], amplitude: 1, frequency: 100}'",
+                                "'transient.probes[0]={name: tip, point: [0.1, 0.01, 0.01], side: upper}'"}) {
+    SCOPED_TRACE(set);
+    const Result checked = crackle("check " + scene_file().string() + " --no-assembly --set " + set);
+    EXPECT_EQ(checked.exit_code, 2) << checked.output;
+    const Result ran = run("outside-" + std::to_string(checked.output.size()), "--set " + set);
+    EXPECT_EQ(ran.exit_code, 2) << ran.output;
+    const auto error_line = [](const std::string& output) { return output.substr(output.find("crackle: error: ")); };
+    EXPECT_EQ(error_line(checked.output), error_line(ran.output));  // word for word
+  }
+  const Result swept =
+      crackle("sweep " + scene_file().string() + " -q -o " + (scratch() / "outside-sweep").string() +
+              " --set 'transient.probes[0].point=[10,10,10]' --set 'sweep={frequency: {from: 90, to: 110}}'");
+  EXPECT_EQ(swept.exit_code, 2) << swept.output;
+  EXPECT_NE(swept.output.find("transient.probes[0].point: expected a point in the body"), std::string::npos)
+      << swept.output;
 
   // A point inside snaps to its nearest node; transient.json says how far that is.
   const Result inside = run("inside", "--set 'transient.probes[0].point=[0.199, 0.02, 0.0099]'");

@@ -160,6 +160,38 @@ TEST(StudyPlan, MessagesNameFileLineAndPath) {
       "beam.yaml:19: study.vary.material.nu: expected as many values as material.E (2) in mode zip, got 1");
 }
 
+TEST(StudyPlan, AKeyThatNoOutputReadsIsRefused) {
+  const std::string base = base_scene();  // 14 lines: the study starts on line 15
+  const auto study = [&](const std::string& body) { return error_of(base + "study:\n" + body); };
+  const std::string advice =
+      " reads (every case would be the same run); add the output that uses it to study.outputs (spectrum: crackle "
+      "run, sweep: crackle sweep) or vary another key";
+  // The default output is modal: crackle modal never steps in time.
+  EXPECT_EQ(study("  vary:\n    transient.time_step: [1.0e-7, 2.0e-7]\n"),
+            "beam.yaml:17: study.vary.transient.time_step: expected a key that an output of study.outputs (modal) "
+            "reads, got 'transient.time_step', which crackle modal never" + advice);
+  EXPECT_EQ(study("  vary:\n    spectrum.harmonics: [3, 5]\n  outputs: [modal]\n"),
+            "beam.yaml:17: study.vary.spectrum.harmonics: expected a key that an output of study.outputs (modal) "
+            "reads, got 'spectrum.harmonics', which crackle modal never" + advice);
+  EXPECT_EQ(study("  vary:\n    sweep.points: [10, 20]\n  outputs: [spectrum]\n"),
+            "beam.yaml:17: study.vary.sweep.points: expected a key that an output of study.outputs (spectrum) "
+            "reads, got 'sweep.points', which crackle run never" + advice);
+  EXPECT_EQ(study("  vary:\n    sweep.points: [10, 20]\n  outputs: [modal, spectrum]\n"),
+            "beam.yaml:17: study.vary.sweep.points: expected a key that an output of study.outputs (modal, "
+            "spectrum) reads, got 'sweep.points', which none of their commands" + advice);
+  // What an output reads is not refused, and one output that reads the key is enough.
+  EXPECT_EQ(output_reads("modal", "crack.region.z"), true);
+  EXPECT_EQ(output_reads("modal", "mesh.box.cells[0]"), true);
+  EXPECT_EQ(output_reads("modal", "transient.damping.ratio"), false);
+  EXPECT_EQ(output_reads("spectrum", "transient.damping.ratio"), true);
+  EXPECT_EQ(output_reads("spectrum", "sweep.points"), false);
+  EXPECT_EQ(output_reads("sweep", "transient.damping.ratio"), true);
+  EXPECT_EQ(output_reads("sweep", "identify.unknowns"), false);
+  EXPECT_EQ(error_of(base + "transient:\n  duration: 0.01\nstudy:\n  vary:\n    transient.duration: [0.01, 0.02]\n"
+                            "  outputs: [modal, spectrum]\n"),
+            "(no error)");
+}
+
 TEST(StudyPlan, BadOverrideNamesTheCaseAndPath) {
   const auto study = [&](const std::string& body) { return error_of(base_scene() + "study:\n" + body); };
   EXPECT_EQ(study("  vary:\n    material.nu: [0.2, 0.7]\n"),
@@ -262,8 +294,12 @@ TEST(StudyPlan, EveryKeyOfTheSceneFormatCanBeVaried) {
         const std::string value = value_text(values, instance);
         if (value.empty()) continue;
         // The current value, twice, so that the study has two cases.
-        const std::string text =
-            bases[b] + "study:\n  vary:\n    " + instance + ": [" + value + ", " + value + "]\n";
+        // With an output whose command reads the key (a study varying a key none reads is refused).
+        const std::string output = output_reads("modal", instance)      ? "modal"
+                                   : output_reads("spectrum", instance) ? "spectrum"
+                                                                        : "sweep";
+        const std::string text = bases[b] + "study:\n  vary:\n    " + instance + ": [" + value + ", " + value +
+                                 "]\n  outputs: [" + output + "]\n";
         try {
           const StudyPlan plan = plan_study(text, "base.yaml");
           EXPECT_EQ(plan.cases.size(), 2u) << instance;
