@@ -261,11 +261,29 @@ std::vector<fs::path> run_forward_cases(const YAML::Node& base, const std::vecto
       throw SolverError("forward runs: mesh.box.order given for some cases of a batch only");
     if (run.order > 0) add("mesh.box.order", std::to_string(run.order), c);
   }
+  for (const auto& [path, list] : values)
+    if (list.size() != cases.size()) throw SolverError("forward runs: not every case sets " + path);
+  // Cases that set the same values are one run (the points of a map that differ only in an unknown
+  // this command never reads, such as the damping of a modal batch).
+  std::vector<std::size_t> run_of(cases.size());
+  std::vector<std::size_t> distinct;  // the first case of each run
+  std::map<std::string, std::size_t> seen;
+  for (std::size_t c = 0; c < cases.size(); ++c) {
+    std::string signature;
+    for (const auto& [path, list] : values) signature += path + "=" + list[c] + "\n";
+    const auto [it, inserted] = seen.emplace(signature, distinct.size());
+    if (inserted) distinct.push_back(c);
+    run_of[c] = it->second;
+  }
+  if (values.empty()) {  // no case sets anything: one run of the scene as it is, at its own order
+    const YAML::Node order = base["mesh"] && base["mesh"]["box"] ? base["mesh"]["box"]["order"] : YAML::Node();
+    if (!order || !order.IsScalar()) throw SolverError("forward runs: no unknown is read by crackle " + command);
+    values.emplace_back("mesh.box.order", std::vector<std::string>{order.Scalar()});
+  }
   YAML::Node vary(YAML::NodeType::Map);
   for (const auto& [path, list] : values) {
-    if (list.size() != cases.size()) throw SolverError("forward runs: not every case sets " + path);
     YAML::Node seq(YAML::NodeType::Sequence);
-    for (const std::string& text : list) seq.push_back(YAML::Load(text));
+    for (std::size_t c : distinct) seq.push_back(YAML::Load(list[std::min(c, list.size() - 1)]));
     vary[path] = seq;
   }
   document["study"]["vary"] = vary;
@@ -292,7 +310,7 @@ std::vector<fs::path> run_forward_cases(const YAML::Node& base, const std::vecto
   std::vector<fs::path> folders;
   const std::string wanted = command == "modal" ? "modal.json" : "sweep.csv";
   for (std::size_t c = 0; c < cases.size(); ++c) {
-    const fs::path case_dir = folder / "runs" / study::case_folder(static_cast<int>(c));
+    const fs::path case_dir = folder / "runs" / study::case_folder(static_cast<int>(run_of[c]));
     if (!fs::exists(case_dir / wanted)) {
       std::string error = "no " + wanted;
       try {

@@ -26,6 +26,7 @@
 #include "scene/schema.hpp"
 #include "scene/yaml_text.hpp"
 #include "spectral/plot.hpp"
+#include "transient/damping.hpp"
 #include "study/plan.hpp"
 #include "study/study.hpp"
 
@@ -110,8 +111,9 @@ constexpr double kSweepHalfWidth = 1e-4;
 /// command grades its mesh towards the crack front and the sweep's reduced model does not.
 class Forward {
  public:
-  Forward(const IdentifySpec& spec, YAML::Node base, const IdentifyOptions& options, std::ostream& log)
-      : spec_(spec), base_(std::move(base)), options_(options), log_(log) {
+  Forward(const IdentifySpec& spec, YAML::Node base, const scene::DampingSection& damping,
+          const IdentifyOptions& options, std::ostream& log)
+      : spec_(spec), base_(std::move(base)), scene_damping_(damping), options_(options), log_(log) {
     std::set<double> drives;
     for (const Measurement& m : spec_.measured) {
       if (!is_frequency(m.quantity)) drives.insert(m.drive_hz);
@@ -157,6 +159,7 @@ class Forward {
             if (measurement.quantity == "f_uncracked") value = pair["f_uncracked_hz"].get<double>();
             if (measurement.quantity == "f_open" && paired) value = pair["f_open_hz"].get<double>();
             if (measurement.quantity == "f_bilinear" && paired) value = pair["f_bilinear_hz"].get<double>();
+            if (measurement.quantity == "damping_ratio") value = damping_ratio(thetas[t], pairs, pair);
           }
         }
         m[static_cast<Eigen::Index>(i)] = value;
@@ -169,6 +172,35 @@ class Forward {
   int runs() const { return runs_; }
 
  private:
+  /// The modal damping ratio of the scene's Rayleigh damping (MODEL.md eq. 26) at a mode's frequency:
+  /// xi = alpha / (2 omega) + beta omega / 2 at the bilinear frequency (the ring-down's) of a paired
+  /// mode, else the uncracked one; the damping keys among the unknowns take theta's values; a ratio
+  /// at a mode is at that mode's uncracked frequency, as crackle run sets it.
+  double damping_ratio(const VectorX& theta, const json& pairs, const json& pair) const {
+    scene::DampingSection damping = scene_damping_;
+    for (std::size_t j = 0; j < spec_.unknowns.size(); ++j) {
+      const std::string& key = spec_.unknowns[j].key;
+      const double value = theta[static_cast<Eigen::Index>(j)];
+      if (key == "transient.damping.ratio") damping.ratio = value;
+      if (key == "transient.damping.alpha") damping.alpha = value;
+      if (key == "transient.damping.beta") damping.beta = value;
+      if (key == "transient.damping.at" || key == "transient.damping.at.hz") damping.at_hz = value;
+    }
+    const double f_hz = pair.value("paired", true) ? pair["f_bilinear_hz"].get<double>() : pair["f_uncracked_hz"].get<double>();
+    transient::RayleighDamping rayleigh{damping.alpha, damping.beta};
+    if (damping.ratio) {
+      double at_hz = damping.at_hz.value_or(kNaN);
+      if (!damping.at_hz) {
+        if (damping.at_mode < 1 || static_cast<std::size_t>(damping.at_mode) > pairs.size()) return kNaN;
+        at_hz = pairs[static_cast<std::size_t>(damping.at_mode - 1)]["f_uncracked_hz"].get<double>();
+      }
+      const double omega_at = 2.0 * M_PI * at_hz;
+      rayleigh = damping.type == "stiffness" ? transient::stiffness_proportional_damping(*damping.ratio, omega_at)
+                                             : transient::mass_proportional_damping(*damping.ratio, omega_at);
+    }
+    return transient::damping_ratio(rayleigh, 2.0 * M_PI * f_hz);
+  }
+
   /// One study over the thetas (times the drive frequencies, when given: `crackle sweep` cases);
   /// the case folders in order (theta-major). SolverError names a case that failed.
   std::vector<fs::path> run_cases(const std::vector<VectorX>& thetas, const std::vector<double>& drives,
@@ -198,12 +230,13 @@ class Forward {
     const std::vector<fs::path> folders = run_forward_cases(document, spec_.unknowns, cases, drives.empty() ? "modal" : "sweep",
                                                             folder, {options_.executable, options_.jobs}, log_,
                                                             progress && options_.progress);
-    runs_ += static_cast<int>(folders.size());
+    runs_ += static_cast<int>(std::set<fs::path>(folders.begin(), folders.end()).size());  // distinct runs
     return folders;
   }
 
   const IdentifySpec& spec_;
   YAML::Node base_;
+  scene::DampingSection scene_damping_;  ///< transient.damping as the scene writes it (damping_ratio)
   const IdentifyOptions& options_;
   std::ostream& log_;
   bool frequencies_ = false;    ///< a frequency is measured
@@ -337,7 +370,8 @@ const std::vector<std::string>& frequency_quantities() {
 }
 
 const std::vector<std::string>& computed_quantities() {
-  static const std::vector<std::string> names = {"f_uncracked", "f_open", "f_bilinear", "A1", "A2/A1", "A3/A1"};
+  static const std::vector<std::string> names = {"f_uncracked", "f_open", "f_bilinear", "damping_ratio",
+                                                 "A1",          "A2/A1",  "A3/A1"};
   return names;
 }
 
@@ -488,10 +522,27 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
     const auto& computed = computed_quantities();
     if (std::find(computed.begin(), computed.end(), m.quantity) == computed.end())
       throw InputError(m.where + ": quantity: expected one of " + join(computed) +
-                       " (identify does not compute damping ratios or the period-two branch yet), got '" + m.quantity + "'");
+                       " (identify does not compute the period-two branch yet), got '" + m.quantity + "'");
     if (is_frequency(m.quantity) && m.mode > scene.modal.modes)
       throw InputError(m.where + ": mode: expected a mode the scene solves (modal.modes = " +
                        std::to_string(scene.modal.modes) + "), got " + std::to_string(m.mode));
+  }
+  // An unknown that no measured quantity depends on cannot be identified: refused, not fitted flat.
+  bool harmonic = false, frequency = false, damping = false;
+  for (const Measurement& m : spec.measured) {
+    harmonic = harmonic || !is_frequency(m.quantity);
+    frequency = frequency || is_frequency(m.quantity);
+    damping = damping || m.quantity == "damping_ratio";
+  }
+  for (const Unknown& u : spec.unknowns) {
+    if ((frequency && study::output_reads("modal", u.path)) || (harmonic && study::output_reads("sweep", u.path)) ||
+        (damping && u.path.rfind("transient.damping.", 0) == 0))
+      continue;
+    fail(file, u.line, "identify.unknowns." + u.key, "an unknown that a measured quantity depends on",
+         "'" + u.key + "', which " +
+             (harmonic ? std::string("no measured quantity depends on")
+                       : "the measured frequencies (crackle modal) do not depend on; measure a damping_ratio or a "
+                         "harmonic ratio (A2/A1, A3/A1 at a drive_hz: crackle sweep) to identify it, or drop it"));
   }
   YAML::Node base = scene::parse_yaml(text, file);
   base.remove("identify");
@@ -502,7 +553,7 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
   // A rerun into the same folder resumes: the forward runs are study cases, cached by their scenes.
   const fs::path dir(options.output_dir);
   fs::create_directories(dir);
-  Forward forward(spec, base, options, log);
+  Forward forward(spec, base, scene.transient ? scene.transient->damping : scene::DampingSection{}, options, log);
   fit::Bounds bounds{VectorX(k), VectorX(k)};
   for (std::size_t j = 0; j < k; ++j) {
     bounds.lower[static_cast<Eigen::Index>(j)] = spec.unknowns[j].lower;

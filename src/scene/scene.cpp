@@ -1017,8 +1017,10 @@ const Param& identify_parameters() {
         choice("quantity", "What was measured: modal frequencies per uncracked mode (f_uncracked, f_open, f_bilinear: "
                            "the modal solve), or a probe's harmonics at a drive frequency (A1 [m], A2/A1, A3/A1: "
                            "harmonic balance on the reduced model, a narrow crackle sweep about drive_hz with the "
-                           "scene's excitation, damping and sweep settings); damping_ratio and A1/2/A1 are accepted "
-                           "and checked, then refused as not yet computed.",
+                           "scene's excitation, damping and sweep settings); damping_ratio per mode: the scene's "
+                           "Rayleigh damping (transient.damping, its keys among the unknowns at their values) at the "
+                           "mode's bilinear frequency (its ring-down's; the uncracked one for an unpaired mode); "
+                           "A1/2/A1 is accepted and checked, then refused as not yet computed.",
                {"f_uncracked", "f_open", "f_bilinear", "damping_ratio", "A1", "A2/A1", "A3/A1", "A1/2/A1"}).required(),
         integer("mode", "Uncracked mode number (1 = lowest; open modes paired by MAC), for the frequencies.").at_least(1),
         text("probe", "A probe of transient.probes, for the harmonic quantities."),

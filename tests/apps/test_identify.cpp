@@ -260,6 +260,50 @@ TEST(Identify, FrequenciesAndHarmonicRatiosOfTheFullModel) {
   }
 }
 
+TEST(Identify, AMeasuredDampingRatioIdentifiesTheDampingWithTheCrack) {
+  // The beam's frequencies (modes 1, 3, 5 of the finer mesh) and the damping ratios of modes 1 and 3
+  // of its ring-down: the scene's mass-proportional damping with xi = 0.03 at the uncracked mode 1,
+  // xi_r = 0.03 f_u1 / f_b_r (5 % noise). The damping is a third unknown; the modal batches run each
+  // crack once (the map's points that differ only in the damping are one run).
+  const fs::path dir = scratch("damping");
+  const double at = 0.05, z0 = 0.007, xi = 0.03;
+  const json pairs = truth_pairs(dir, at, z0);
+  write_measurements(dir / "measured.csv", pairs, 5e-4, 21);
+  std::mt19937 generator(22);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  {
+    std::ofstream out(dir / "measured.csv", std::ios::app);
+    out.precision(10);
+    for (int mode : {1, 3}) {
+      const double value = xi * pairs[0]["f_uncracked_hz"].get<double>() / pairs[mode - 1]["f_bilinear_hz"].get<double>();
+      out << "damping_ratio," << mode << ",,," << value * (1.0 + 0.05 * gauss(generator)) << "," << 0.05 * value << "\n";
+    }
+  }
+  std::string text = read_text(identify_scene(dir, (dir / "measured.csv").string(), 5));
+  const std::string depth = "    crack.region.z[0]: [0.005, 0.0095]";
+  text.insert(text.find('\n', text.find(depth)) + 1, "    transient.damping.ratio: [0.01, 0.1]\n");
+  // The sigmas are the synthetic noise's own: trusted. (Scaled by the fit, s^2 = chi^2/(n - k) is
+  // about 0.09 here, as the frequencies' model errors dwarf their residuals, and every interval
+  // would shrink to a third.)
+  text.replace(text.find("  map: {points: 5}"), 18, "  map: {points: 5}\n  sigma: trusted");
+  std::ofstream(dir / "damping.yaml") << text;
+  const auto result = crackle("identify " + (dir / "damping.yaml").string() + " -o " + (dir / "out").string() + " -q",
+                              "OMP_NUM_THREADS=1");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const json document = read_json(dir / "out" / "identify.json");
+  expect_truth_inside(document, at, z0);
+  const json& interval = document["interval_95"]["transient.damping.ratio"];
+  EXPECT_LE(interval[0].get<double>(), xi) << document.dump(1);
+  EXPECT_GE(interval[1].get<double>(), xi) << document.dump(1);
+  EXPECT_LT(interval[1].get<double>() - interval[0].get<double>(), 0.2 * xi) << interval;  // two 5 % ratios
+  // 125 map points but 25 cracks: one modal run each (with the model error's orders and the fits').
+  EXPECT_EQ(document["map"]["runs"].get<int>(), 125);
+  std::cout << "forward runs " << document["forward_runs"] << " for 125 map points\n";
+  EXPECT_LT(document["forward_runs"].get<int>(), 60) << document["forward_runs"];
+  for (const json& row : document["residuals"])
+    if (row["quantity"] == "damping_ratio") EXPECT_LT(std::abs(row["normalised"].get<double>()), 4.0) << row;
+}
+
 TEST(Identify, BadMeasurementsAreRefusedWithFileLineAndColumn) {
   const fs::path dir = scratch("bad");
   const std::string header = "quantity,mode,probe,drive_hz,value,sigma\n";
@@ -273,7 +317,7 @@ TEST(Identify, BadMeasurementsAreRefusedWithFileLineAndColumn) {
       {"A2/A1,,hammer,102.9,0.12,0.01\n", "measured.csv:2: probe: expected a probe of the scene's transient.probes, got 'hammer'"},
       {"f_bilinear,1,,,nan,0.1\n", "measured.csv:2: column value: expected a finite number, got 'nan'"},
       {"A1/2/A1,,tip,102.9,0.001,0.0001\n",
-       "measured.csv:2: quantity: expected one of f_uncracked, f_open, f_bilinear, A1, A2/A1, A3/A1"},
+       "measured.csv:2: quantity: expected one of f_uncracked, f_open, f_bilinear, damping_ratio, A1, A2/A1, A3/A1"},
   };
   for (const Case& c : cases) {
     std::ofstream(dir / "measured.csv") << header << c.rows;
@@ -297,6 +341,20 @@ TEST(Identify, BadMeasurementsAreRefusedWithFileLineAndColumn) {
   result = crackle("identify " + (dir / "key.yaml").string() + " -o " + (dir / "out").string());
   EXPECT_EQ(result.exit_code, 2);
   EXPECT_NE(result.output.find("identify.unknowns.crack.plane.ta"), std::string::npos) << result.output;
+  // An unknown that no measured quantity depends on: the frequencies do not depend on the damping.
+  std::ofstream(dir / "measured.csv") << header << "f_bilinear,1,,,205.6,0.1\nf_bilinear,3,,,1280.0,0.5\n";
+  text = read_text(identify_scene(dir, (dir / "measured.csv").string(), 3));
+  const std::string depth = "    crack.region.z[0]: [0.005, 0.0095]";
+  text.insert(text.find('\n', text.find(depth)) + 1, "    transient.damping.ratio: [0.01, 0.1]\n");
+  std::ofstream(dir / "damping.yaml") << text;
+  result = crackle("identify " + (dir / "damping.yaml").string() + " -o " + (dir / "out").string());
+  EXPECT_EQ(result.exit_code, 2) << result.output;
+  EXPECT_NE(result.output.find("damping.yaml:30: identify.unknowns.transient.damping.ratio: expected an unknown that "
+                               "a measured quantity depends on, got 'transient.damping.ratio', which the measured "
+                               "frequencies (crackle modal) do not depend on; measure a damping_ratio or a harmonic "
+                               "ratio"),
+            std::string::npos)
+      << result.output;
 }
 
 }  // namespace
