@@ -10,13 +10,12 @@
 #include <optional>
 
 #include <Eigen/Core>
-#include <Eigen/LU>
-#include <Eigen/SVD>
 
 #include "core/errors.hpp"
 #include "core/interrupt.hpp"
 #include "core/resources.hpp"
 #include "reduced/integrator.hpp"
+#include "sweep/branch_switching.hpp"
 
 namespace crackle::pipeline {
 namespace {
@@ -267,35 +266,6 @@ class BranchRecorder {
   double first_flagged_hz_ = 0.0;
 };
 
-/// Index of the unknowns on the odd harmonics of Omega/2 in the gap layout of a nu = 2 solver (`rows` c).
-std::vector<Index> odd_unknowns(Index rows, int harmonics) {
-  std::vector<Index> odd;
-  for (int k = 1; k <= harmonics; k += 2)
-    for (int component : {2 * k - 1, 2 * k})
-      for (Index i = 0; i < rows; ++i) odd.push_back(component * rows + i);
-  return odd;
-}
-
-/// The gaps on the odd harmonics of Omega/2 of a nu = 2 solution.
-VectorX odd_part(const sweep::Solution& solution, const std::vector<Index>& odd) {
-  VectorX part(odd.size());
-  for (std::size_t i = 0; i < odd.size(); ++i) part[i] = solution.gaps[odd[i]];
-  return part;
-}
-
-/// Share of the odd harmonics of Omega/2 in the gap response of a nu = 2 solution (0: period one).
-double period_two_share(const sweep::Solution& solution, Index rows) {
-  const Index components = solution.gaps.size() / rows;
-  double odd = 0.0, total = 0.0;
-  for (Index component = 1; component < components; ++component) {
-    const double part = solution.gaps.segment(component * rows, rows).squaredNorm();
-    total += part;
-    if (((component + 1) / 2) % 2 == 1) odd += part;  // components 2k-1, 2k hold harmonic k
-  }
-  return total > 0.0 ? std::sqrt(odd / total) : 0.0;
-}
-
-constexpr double kJoinedShare = 1e-3;  ///< a nu = 2 point below this share has rejoined the period-one branch
 
 /// The solver options of a sweep with `harmonics` of the base frequency Omega / nu, driven from
 /// `drive_omega` [rad/s] (the automatic gap scale's dynamic floor).
@@ -324,80 +294,6 @@ sweep::ContinuationOptions continuation_options(const SweepSettings& settings) {
   continuation.min_step = std::min(continuation.min_step, 1e-3 * continuation.max_step);
   continuation.max_points = 50 * section.points;
   return continuation;
-}
-
-/// The odd-harmonic block of the nu = 2 Jacobian at a period-one state `gaps` (in nu = 2 harmonics).
-/// At a period-one orbit the contact stiffness has period T, so the odd and the even harmonics of
-/// Omega/2 decouple: the block is singular where the nu = 2 branch crosses the period-one one.
-MatrixX odd_block(const sweep::HarmonicBalance& two, double omega, const VectorX& gaps, const std::vector<Index>& odd) {
-  const MatrixX jacobian = two.jacobian(omega, gaps);
-  MatrixX block(odd.size(), odd.size());
-  for (std::size_t i = 0; i < odd.size(); ++i)
-    for (std::size_t j = 0; j < odd.size(); ++j) block(i, j) = jacobian(odd[i], odd[j]);
-  return block;
-}
-
-/// Sign of a determinant (+1, -1; 0 when singular).
-int determinant_sign(const MatrixX& matrix) {
-  const Eigen::PartialPivLU<MatrixX> lu(matrix);
-  double sign = lu.permutationP().determinant();
-  for (Index i = 0; i < matrix.rows(); ++i) sign *= lu.matrixLU()(i, i) > 0.0 ? 1.0 : (lu.matrixLU()(i, i) < 0.0 ? -1.0 : 0.0);
-  return static_cast<int>(sign);
-}
-
-/// The first nu = 2 solution of the branch born at the first period doubling of `branch` (nu = 1).
-/// The doubling of the truncated harmonic balance is where the odd block of the nu = 2 Jacobian turns
-/// singular along the period-one branch (its determinant changes sign; the monodromy's doubling of the
-/// sampled orbit converges to it with H): found between branch points, refined by bisection in Omega.
-/// From there Keller's corrector along the block's null vector (sweep::branch_off) at a few steps;
-/// none if no sign change or no step converges to a solution with a period-two share.
-std::optional<sweep::Solution> period_two_start(const reduced::ReducedSystem& system, const sweep::HarmonicBalance& one,
-                                                const sweep::HarmonicBalance& two,
-                                                const std::vector<sweep::BranchPoint>& branch,
-                                                const sweep::ContinuationOptions& continuation) {
-  const Index rows = system.n_rows();
-  const std::vector<Index> odd = odd_unknowns(rows, two.n_harmonics());
-  const auto embedded = [&](const sweep::Solution& period_one) {
-    return sweep::period_doubled_guess(system, period_one, sweep::Stability(), two.n_harmonics(), 0.0);
-  };
-  const auto sign_at = [&](const sweep::Solution& period_one) {
-    return determinant_sign(odd_block(two, period_one.omega, embedded(period_one), odd));
-  };
-  std::size_t after = 0;
-  int previous = branch.empty() ? 0 : sign_at(branch.front().solution);
-  for (std::size_t i = 1; i < branch.size() && after == 0; ++i) {
-    const int sign = sign_at(branch[i].solution);
-    if (sign != previous) after = i;
-    previous = sign;
-  }
-  if (after == 0) return std::nullopt;
-  // bisection in Omega between the two period-one points around the sign change
-  sweep::Solution low = branch[after - 1].solution, high = branch[after].solution;
-  const int low_sign = sign_at(low);
-  for (int step = 0; step < 12; ++step) {
-    try {
-      sweep::Solution middle = one.solve(0.5 * (low.omega + high.omega), 0.5 * (low.gaps + high.gaps));
-      (sign_at(middle) == low_sign ? low : high) = std::move(middle);
-    } catch (const SolverError&) {
-      break;  // a fold in between: the bracket so far
-    }
-  }
-  sweep::Solution base;
-  base.omega = high.omega;
-  base.gaps = embedded(high);
-  const Eigen::JacobiSVD<MatrixX> svd(odd_block(two, base.omega, base.gaps, odd), Eigen::ComputeFullV);
-  const VectorX null = svd.matrixV().col(svd.matrixV().cols() - 1);
-  VectorX direction = VectorX::Zero(base.gaps.size());
-  for (std::size_t i = 0; i < odd.size(); ++i) direction[odd[i]] = null[i];
-  const double size = high.gaps.cwiseAbs().maxCoeff();
-  for (double step : {0.05, 0.02, 0.1, 0.01}) {
-    try {
-      sweep::Solution solution = sweep::branch_off(two, base, direction, step * size, continuation);
-      if (period_two_share(solution, rows) > 10.0 * kJoinedShare) return solution;
-    } catch (const SolverError&) {
-    }
-  }
-  return std::nullopt;
 }
 
 }  // namespace
@@ -430,7 +326,7 @@ SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const S
   }
   if (switch_branch) {
     const sweep::HarmonicBalance two(system, balance_options(system, section.harmonics, 2, section.solver, from));
-    const std::optional<sweep::Solution> start = period_two_start(system, hb, two, period_one, continuation);
+    const std::optional<sweep::Solution> start = sweep::period_two_start(system, hb, two, period_one, continuation);
     period_one.clear();
     if (!start) {
       result.warnings.push_back("subharmonic 2: no period doubling of the period-one branch in the range (or no "
@@ -439,17 +335,17 @@ SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const S
       // Each segment ends where the branch rejoins the period-one one, or where its odd part reverses
       // from one point to the next: it went through the doubling onto its own image shifted by one
       // excitation period (the same orbit).
-      const std::vector<Index> odd = odd_unknowns(system.n_rows(), section.harmonics);
+      const std::vector<Index> odd = sweep::odd_unknowns(system.n_rows(), section.harmonics);
       VectorX previous_odd;
       recorder.keep_going = [&](const sweep::Solution& solution) {
-        VectorX part = odd_part(solution, odd);
+        VectorX part = sweep::odd_part(solution, odd);
         const bool reversed = part.dot(previous_odd) < 0.0;
         previous_odd = std::move(part);
-        return !reversed && period_two_share(solution, system.n_rows()) > kJoinedShare;
+        return !reversed && sweep::period_two_share(solution, system.n_rows()) > sweep::kJoinedShare;
       };
       // down, then up from the start, each within the whole range (a branch may turn back past its start)
       for (const auto& [begin, end] : {std::pair(to, from), std::pair(from, to)}) {
-        previous_odd = odd_part(*start, odd);
+        previous_odd = sweep::odd_part(*start, odd);
         recorder.start_segment();
         sweep::continue_branch(two, begin, end, continuation, std::ref(recorder), &*start);
       }

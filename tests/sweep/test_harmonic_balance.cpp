@@ -14,6 +14,7 @@
 #include <cstdlib>
 
 #include "core/errors.hpp"
+#include "sweep/branch_switching.hpp"
 #include "sweep/harmonic_balance.hpp"
 
 namespace crackle::sweep {
@@ -734,6 +735,57 @@ TEST(Continuation, BranchOffAtAPeriodDoublingReachesTheFixedFrequencySolution) {
               from_mode.amplitude(0, 0.5));
   EXPECT_NEAR(fixed.amplitude(0, 0.5), from_mode.amplitude(0, 0.5), 1e-8 * from_mode.amplitude(0, 0.5));
   EXPECT_GT(fixed.amplitude(0, 0.5), fixed.amplitude(0, 1.0));
+}
+
+TEST(BranchSwitching, ThePeriodTwoStartIsFoundWhereTheOddBlockTurnsSingular) {
+  // The oscillator above, its period-one branch with harmonics 10 of Omega; the period-two solver
+  // with 20 of Omega/2 (the same orders). period_two_start finds the doubling between the branch
+  // points that the monodromy flags, and lands on a period-two solution whose odd share is well above
+  // the joined threshold; continued, that branch passes Omega = 2.5 through the solution Newton finds
+  // there from the critical mode.
+  const DoublingOscillator oscillator;
+  const auto& [s, opt1, hb1, copt, branch] = oscillator;
+  std::size_t doubling = 0;
+  while (doubling < branch.size() && !branch[doubling].period_doubling) ++doubling;
+  ASSERT_LT(doubling, branch.size());
+  HarmonicBalanceOptions opt2;
+  opt2.harmonics = 20;
+  opt2.subharmonic = 2;
+  const HarmonicBalance hb2(s, opt2);
+  const std::optional<Solution> start = period_two_start(s, hb1, hb2, branch, copt);
+  ASSERT_TRUE(start.has_value());
+  EXPECT_LE(start->residual, opt2.tolerance);
+  EXPECT_GT(period_two_share(*start, s.n_rows()), 10.0 * kJoinedShare);
+  EXPECT_GT(start->omega, branch[doubling - 1].solution.omega - 0.05);
+  EXPECT_LT(start->omega, branch[doubling].solution.omega + 0.05);
+  std::printf("  period-two start at Omega = %.5f (doubling flagged between %.5f and %.5f), share %.3f\n",
+              start->omega, branch[doubling - 1].solution.omega, branch[doubling].solution.omega,
+              period_two_share(*start, s.n_rows()));
+  // A period-one solution written in nu = 2 harmonics has no odd part.
+  Solution embedded;
+  embedded.gaps = period_doubled_guess(s, branch.front().solution, Stability(), opt2.harmonics, 0.0);
+  EXPECT_EQ(period_two_share(embedded, s.n_rows()), 0.0);
+  EXPECT_EQ(odd_part(embedded, odd_unknowns(s.n_rows(), opt2.harmonics)).norm(), 0.0);
+  EXPECT_EQ(odd_unknowns(s.n_rows(), opt2.harmonics).size(), static_cast<std::size_t>(2 * 10 * s.n_rows()));
+  // Continued up, the branch passes 2.5 through the fixed-frequency solution.
+  std::vector<BranchPoint> period_two;
+  continue_branch(hb2, start->omega, 2.6, copt, [&](const BranchPoint& point) {
+    period_two.push_back(point);
+    return point.solution.omega < 2.5;
+  }, &*start);
+  ASSERT_GE(period_two.size(), 2u);
+  const BranchPoint& after = period_two.back();
+  const BranchPoint& before = period_two[period_two.size() - 2];
+  ASSERT_GE(after.solution.omega, 2.5);
+  const double w = (2.5 - before.solution.omega) / (after.solution.omega - before.solution.omega);
+  const Solution fixed = hb2.solve(2.5, (1.0 - w) * before.solution.gaps + w * after.solution.gaps);
+  const double size = branch[doubling].solution.gaps.cwiseAbs().maxCoeff();
+  const Solution from_mode = hb2.solve(2.5, period_doubled_guess(s, hb1.solve(2.5), hb1.hill_stability(hb1.solve(2.5)),
+                                                                 opt2.harmonics, size));
+  EXPECT_NEAR(fixed.amplitude(0, 0.5), from_mode.amplitude(0, 0.5), 1e-8 * from_mode.amplitude(0, 0.5));
+  // Before the doubling there is no period-two branch to switch to.
+  const std::vector<BranchPoint> stable(branch.begin(), branch.begin() + static_cast<std::ptrdiff_t>(doubling) - 1);
+  EXPECT_FALSE(period_two_start(s, hb1, hb2, stable, copt).has_value());
 }
 
 }  // namespace
