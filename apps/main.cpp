@@ -212,8 +212,8 @@ int main(int argc, char** argv) {
   modal_command->add_option("-o,--output", modal.output_directory, "Output directory")->capture_default_str();
   modal_command->add_option("--modes", modal.modes, "Number of modes (overrides modal.modes)")
       ->check(above(0, true, "a positive integer"));
-  modal_command->add_option("--solver", modal.solver, "slepc or arpack (overrides modal.solver)")
-      ->check(CLI::IsMember({"slepc", "arpack"}));
+  modal_command->add_option("--solver", modal.solver, "auto, slepc or arpack (overrides modal.solver)")
+      ->check(CLI::IsMember({"auto", "slepc", "arpack"}));
   modal_command->add_option("--modal-cache", modal.modal_cache,
                             "Folder where the modal solves (by fingerprint of K and M) and the reduced model are looked up and stored (shared by study cases)");
   modal_command->add_flag("--overwrite", modal.overwrite,
@@ -363,7 +363,15 @@ int main(int argc, char** argv) {
     if (*check_command) pipeline::run_check(check, check_quiet ? discard : std::cout);
     if (*modal_command) {
       PetscArguments petsc(arguments.own.front(), modal_petsc, arguments.petsc);
-      modal::SlepcSession session(petsc.argc(), petsc.argv());
+      // As for run: PETSc starts at the first SLEPc solve (an ARPACK solve, modal.solver: auto on one
+      // process, never pays MPI's start-up: a third of an identify forward run); at once under mpirun
+      // and with PETSc options, so that they are read, checked and make auto choose SLEPc.
+      const char* environment_options = std::getenv("PETSC_OPTIONS");
+      const bool options_given = !modal_petsc.empty() || !arguments.petsc.empty() ||
+                                 (environment_options && *environment_options);
+      modal::SlepcSession session(petsc.argc(), petsc.argv(),
+                                  options_given || mpi_world_size() > 1 ? modal::SlepcSession::Start::now
+                                                                        : modal::SlepcSession::Start::on_first_use);
       pipeline::run_modal_command(modal, modal_quiet ? discard : std::cout);
     }
     if (*run_command) {
@@ -373,7 +381,9 @@ int main(int argc, char** argv) {
       // pays MPI's start-up); given PETSc options, at once, so that they are read and checked; under
       // mpirun -np N > 1 at once: the ranks share one transient (rank 0 writes and prints, errors
       // are agreed, so every rank exits with the same code and only rank 0 says why).
-      const bool options_given = !run_petsc.empty() || !arguments.petsc.empty();
+      const char* environment_options = std::getenv("PETSC_OPTIONS");
+      const bool options_given =
+          !run_petsc.empty() || !arguments.petsc.empty() || (environment_options && *environment_options);
       quiet_rank = mpi_world_size() > 1 && mpi_world_rank() != 0;
       modal::SlepcSession session(petsc.argc(), petsc.argv(),
                                   options_given || mpi_world_size() > 1 ? modal::SlepcSession::Start::now

@@ -206,7 +206,15 @@ void set_petsc_options(const std::vector<std::pair<std::string, std::string>>& o
       if (!value.empty()) petsc_words.push_back(value);
     }
   }
-  if (!initialised) refresh_petsc_argv();
+  if (!initialised) {
+    // PETSc starts now, so that the options are in its database: modal.solver: auto reads SLEPc
+    // options there and takes SLEPc for them.
+    refresh_petsc_argv();
+    if (!options.empty()) {
+      ensure_session();
+      modal::SlepcSession::start();
+    }
+  }
 }
 
 bool petsc_initialised() {

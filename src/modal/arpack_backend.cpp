@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <numeric>
 #include <string>
+#include <optional>
 #include <vector>
 
 #include "core/errors.hpp"
@@ -87,7 +88,18 @@ EigenPairs solve_eigenpairs_arpack(const SparseMatrix& stiffness, const SparseMa
   result.factorization = "cholmod";
 
   Stopwatch watch;
-  CholmodFactor factor(stiffness, mass, options.shift, "ARPACK eigen-solve");
+  std::optional<CholmodFactor> own;
+  if (options.factor) {
+    if (options.factor->rows() != n || options.factor->shift() != options.shift) {
+      throw SolverError("ARPACK eigen-solve: the given factor is of another matrix (" +
+                        std::to_string(options.factor->rows()) + " rows, shift " +
+                        format_number(options.factor->shift()) + ") than K - " + format_number(options.shift) +
+                        " M of " + std::to_string(n) + " rows");
+    }
+  } else {
+    own.emplace(stiffness, mass, options.shift, "ARPACK eigen-solve");
+  }
+  CholmodFactor& factor = options.factor ? *options.factor : *own;
   result.factorization_s = watch.seconds();
 
   watch.restart();

@@ -71,12 +71,12 @@ std::vector<Index> CholmodFactor::compressed_ordering(const SparseMatrix& matrix
 
 CholmodFactor::CholmodFactor(const SparseMatrix& stiffness, const SparseMatrix& mass, double shift,
                              std::string context)
-    : context_(std::move(context)), rows_(stiffness.rows()) {
+    : context_(std::move(context)), rows_(stiffness.rows()), shift_(shift) {
   // Without a shift K itself is factorised (no copy: a static solve holds one matrix less).
   const bool copy = shift != 0.0 || !stiffness.isCompressed();
   SparseMatrix shifted;
   if (copy) {
-    shifted = stiffness - shift * mass;
+    shifted = shift != 0.0 ? SparseMatrix(stiffness - shift * mass) : stiffness;
     shifted.makeCompressed();
   }
   const SparseMatrix& matrix = copy ? shifted : stiffness;
@@ -147,6 +147,25 @@ void CholmodFactor::solve(const double* x, double* y, Index columns) {
   }
   const auto* values = static_cast<const double*>(solution_->x);
   std::copy(values, values + rows_ * columns, y);
+}
+
+CholmodFactor* StiffnessFactors::factor(mesh::Variant variant, const SparseMatrix& stiffness) {
+  const double diagonal_sum = stiffness.diagonal().sum();
+  auto found = entries_.find(variant);
+  if (found != entries_.end() && found->second.rows == stiffness.rows() &&
+      found->second.nonzeros == stiffness.nonZeros() && found->second.diagonal_sum == diagonal_sum) {
+    return found->second.factor.get();
+  }
+  Entry entry{stiffness.rows(), stiffness.nonZeros(), diagonal_sum, nullptr};
+  entries_.erase(variant);  // the old factor goes before the new one is made
+  try {
+    const SparseMatrix no_mass;
+    entry.factor = std::make_unique<CholmodFactor>(stiffness, no_mass, 0.0, "the factor of K");
+    ++made_;
+  } catch (const SolverError&) {
+    entry.factor.reset();
+  }
+  return entries_.emplace(variant, std::move(entry)).first->second.factor.get();
 }
 
 void CholmodFactor::fail(const char* what) {

@@ -17,6 +17,8 @@
 
 namespace crackle::modal {
 
+class CholmodFactor;
+
 /// Eigen-solver backend.
 enum class Solver { slepc, arpack };
 
@@ -38,6 +40,9 @@ struct EigenOptions {
   Factorization factorization = Factorization::automatic;
   double tolerance = 1e-10;    ///< relative residual tolerance of the iteration
   int max_iterations = 1000;   ///< restarts (Krylov–Schur) or Arnoldi iterations (ARPACK)
+  /// ARPACK only: a factor of K - shift M the caller made (same K, M and shift), used instead of
+  /// factorising again; several solves on one matrix (a static solve beside) then pay one factor.
+  CholmodFactor* factor = nullptr;
 };
 
 /// Raw eigenpairs as the backend returned them (every rank holds all of them).

@@ -24,6 +24,8 @@
 
 namespace crackle::modal {
 
+class StiffnessFactors;
+
 /// Weighting of the modal assurance criterion.
 enum class MacWeighting {
   mass,   ///< MAC = (a^T M b)^2 / ((a^T M a)(b^T M b)), M the uncracked mass (default)
@@ -43,6 +45,13 @@ struct ModalOptions {
   /// K - sigma M is positive definite even for free bodies (rigid-body modes at lambda = 0).
   std::optional<double> shift;
   double shift_fraction = 1e-10;
+  /// ARPACK only: the caller's factor of K - shift M (EigenOptions::factor); `shift` must be its shift.
+  CholmodFactor* factor = nullptr;
+  /// ARPACK only: where run_modal takes (and leaves) the factor of K of variant `factors_variant`
+  /// when that body is held (StiffnessFactors), shared with later solves on the same K (the reduced
+  /// model's); null: each solve factorises K - sigma M on its own (and drops it).
+  StiffnessFactors* factors = nullptr;
+  mesh::Variant factors_variant = mesh::Variant::open;
   /// A mode is rigid when |f| < rigid_tolerance * f_ref, f_ref = sqrt(lambda_ref) / (2 pi),
   /// lambda_ref = tr K / tr M (the mean eigenvalue of the discrete pencil), and its eigenvalue is
   /// at least 1e6 times below the largest one computed (see solve_modes).

@@ -133,6 +133,7 @@ ModeSet solve_modes(const SparseMatrix& stiffness, const SparseMatrix& mass,
   eigen.tolerance = options.tolerance;
   eigen.max_iterations = options.max_iterations;
   eigen.shift = options.shift.value_or(-options.shift_fraction * reference);
+  eigen.factor = options.factor;
   int n_rigid_request = std::max(0, n_rigid_expected);
   eigen.n_eigenpairs = options.modes + n_rigid_request;
   if (eigen.n_eigenpairs > n) {

@@ -9,6 +9,7 @@
 #include "fem/material.hpp"
 #include "mesh/box.hpp"
 #include "mesh/gmsh.hpp"
+#include "modal/cholmod_factor.hpp"
 #include "pipeline/limits.hpp"
 
 namespace crackle::pipeline {
@@ -163,6 +164,11 @@ contact::ContactOptions scene_contact_options(const scene::Scene& scene) {
   contact.integration = scene.contact.integration == "explicit" ? contact::ContactIntegration::explicit_forces
                                                                 : contact::ContactIntegration::implicit;
   return contact;
+}
+
+modal::StiffnessFactors& Model::factors() const {
+  if (!factors_) factors_ = std::make_shared<modal::StiffnessFactors>();
+  return *factors_;
 }
 
 Model build_model(const scene::Scene& scene, MeshUse use) {

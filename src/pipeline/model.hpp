@@ -14,6 +14,10 @@
 #include "mesh/mesh.hpp"
 #include "scene/scene.hpp"
 
+namespace crackle::modal {
+class StiffnessFactors;
+}
+
 namespace crackle::pipeline {
 
 /// Everything a scene describes about the body, built once and shared by every stage of a run.
@@ -38,8 +42,15 @@ struct Model {
     return entry;
   }
 
+  /// The factors of K that one stage leaves to the next (the modal stage's to the reduced model's
+  /// eigen-solves and static images, and to the runs that share this model), made at the first
+  /// call. Only a run whose later stages solve with K asks for it: a full explicit run must not hold
+  /// a factor through its transient.
+  modal::StiffnessFactors& factors() const;
+
  private:
   mutable std::map<mesh::Variant, std::shared_ptr<const fem::System>> systems_;
+  mutable std::shared_ptr<modal::StiffnessFactors> factors_;
 };
 
 /// The crack contact of the scene's `crack.contact` (and the crack's gap g0).

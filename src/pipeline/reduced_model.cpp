@@ -149,7 +149,7 @@ ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, 
   std::optional<reduced::Reduction> reduction = cached(cache_directory, key, options.modes, options.max_frequency_hz);
   result.from_cache = reduction.has_value();
   if (!reduction) {
-    reduction = reduced::compute_reduction(system, options, outputs, load);
+    reduction = reduced::compute_reduction(system, options, outputs, load, &model.factors());
     if (!cache_directory.empty()) reduced::store_cached_reduction(cache_directory, key, *reduction);
   }
   Index modes = reduction->n_computed_modes();

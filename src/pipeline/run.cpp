@@ -962,7 +962,7 @@ double mode_frequency(const modal::ModalResult& result, int mode, const std::str
 
 std::optional<modal::ModalResult> run_modal_stage(const scene::Scene& scene, const Model& model,
                                                   const fs::path& output_directory, const fs::path& modal_cache,
-                                                  Stage& stage, std::ostream& out) {
+                                                  Stage& stage, std::ostream& out, bool reduced_follows) {
   const std::vector<mesh::Variant> variants = needed_variants(scene, stage.reason);
   if (variants.empty()) {
     stage.reason = "nothing refers to a mode";
@@ -978,6 +978,12 @@ std::optional<modal::ModalResult> run_modal_stage(const scene::Scene& scene, con
   if (scene.sweep) highest = std::max({highest, scene.sweep->from.mode, scene.sweep->to.mode});
   modal_settings.modes = std::max(highest, section.damping.at_mode);
   modal_settings.cache_directory = modal_cache;
+  // The reduced model solves with the transient variant's K again: its factor is kept.
+  if (reduced_follows) {
+    modal_settings.factors = &model.factors();
+    modal_settings.factors_variant =
+        section.variant == "open" && model.mesh.has_crack() ? mesh::Variant::open : mesh::Variant::uncracked;
+  }
   modal::ModalResult modes = modal::run_modal(
       [&model](mesh::Variant variant) -> const fem::System& { return *model.system(variant); }, modal_settings);
   on_writer_rank([&] { modal::write_modal_outputs(output_directory, model.mesh, modes); });
@@ -1014,7 +1020,8 @@ RunOutcome run_scene(const scene::Scene& scene, const RunCommandOptions& options
     modes = reuse->modes.at(reuse->key);
     modal_stage = {"modal", modes.has_value(), "shared with the run of the same mesh in this process", 0.0};
   } else {
-    modes = run_modal_stage(scene, model, directory, options.modal_cache, modal_stage, out);
+    modes = run_modal_stage(scene, model, directory, options.modal_cache, modal_stage, out,
+                            scene.transient->model == "reduced");
   }
   stages.push_back(modal_stage);
   outcome.mode = excitation_mode(scene, modes);

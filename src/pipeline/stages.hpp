@@ -31,10 +31,11 @@ transient::RayleighDamping scene_damping(const scene::Scene& scene, const std::o
 /// The modal stage: the variants the scene needs (a mode referred to by transient.excitation,
 /// transient.damping or sweep.frequency, or a modal: section), with modal.json etc. written to
 /// `output_directory`; std::nullopt (and `stage.reason` says why) when nothing needs modes.
-/// Needs a transient: section.
+/// Needs a transient: section. `reduced_follows`: the reduced model is built next, so the factor of
+/// the transient variant's K is left in model.factors() for it.
 std::optional<modal::ModalResult> run_modal_stage(const scene::Scene& scene, const Model& model,
                                                   const std::filesystem::path& output_directory,
                                                   const std::filesystem::path& modal_cache, Stage& stage,
-                                                  std::ostream& out);
+                                                  std::ostream& out, bool reduced_follows);
 
 }  // namespace crackle::pipeline

@@ -99,7 +99,7 @@ void run_sweep_command(const SweepCommandOptions& options, std::ostream& out, st
   check_points(scene, model);  // a probe outside the body is refused, not read at its nearest node
   Stage modal_stage{"modal", false, "", 0.0};
   const std::optional<modal::ModalResult> modes =
-      run_modal_stage(scene, model, directory, options.modal_cache, modal_stage, out);
+      run_modal_stage(scene, model, directory, options.modal_cache, modal_stage, out, true);
   SweepSettings settings = resolve_settings(scene, modes);
 
   Stopwatch reduction_clock;

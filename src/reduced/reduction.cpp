@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <memory>
+#include <optional>
 
 #include <Eigen/Geometry>
 
@@ -113,11 +115,16 @@ Index modes_below(const VectorX& frequencies_hz, double target_hz) {
 }
 
 /// Lowest modes of (K, M): a fixed count, or every mode up to `target_hz` (solving for more as needed).
+/// `factor`: the caller's factor of K itself (a held body), which every solve then shares.
 modal::ModeSet lowest_modes(const SparseMatrix& stiffness, const SparseMatrix& mass, const ReductionOptions& options,
-                            int n_rigid) {
+                            int n_rigid, modal::CholmodFactor* factor) {
   modal::ModalOptions settings;
   settings.solver = modal::Solver::arpack;
   settings.lumped_mass = true;
+  if (factor) {
+    settings.factor = factor;
+    settings.shift = factor->shift();
+  }
   const Index n_free = stiffness.rows();
   if (options.modes > 0) {
     settings.modes = options.modes;
@@ -150,7 +157,11 @@ class StaticFlexibility {
       : mass_(mass.diagonal()),
         rigid_(rigid_shapes),
         shift_(rigid_shapes.cols() > 0 ? kShiftFraction * lowest_elastic_omega * lowest_elastic_omega : 0.0),
-        factor_(stiffness, mass, -shift_, "reduced model: static solve with K") {}
+        own_(std::make_unique<modal::CholmodFactor>(stiffness, mass, -shift_, "reduced model: static solve with K")),
+        factor_(*own_) {}
+  /// A held body with the caller's factor of K itself (shared with the eigen-solve).
+  StaticFlexibility(const SparseMatrix& mass, modal::CholmodFactor& stiffness_factor)
+      : mass_(mass.diagonal()), shift_(0.0), factor_(stiffness_factor) {}
 
   /// Overwrites `block` (n_free x columns) by G_el block.
   void apply(MatrixX& block) {
@@ -180,7 +191,8 @@ class StaticFlexibility {
   VectorX mass_;
   MatrixX rigid_;
   double shift_;
-  modal::CholmodFactor factor_;
+  std::unique_ptr<modal::CholmodFactor> own_;
+  modal::CholmodFactor& factor_;
 };
 
 void mix(std::uint64_t& hash, const void* data, std::size_t bytes) { modal::fingerprint_mix(hash, data, bytes); }
@@ -241,7 +253,8 @@ VectorX Reduction::modal_coordinates(const VectorX& free_field, Index modes) con
 }
 
 Reduction compute_reduction(const fem::System& system, const ReductionOptions& options,
-                            const std::vector<OutputPoint>& outputs, const fem::LoadShape& load) {
+                            const std::vector<OutputPoint>& outputs, const fem::LoadShape& load,
+                            modal::StiffnessFactors* factors) {
   const fem::Constraints& constraints = system.constraints();
   const int n_rigid = modal::count_rigid_body_modes(system.mesh(), system.dofs(), constraints);
   Reduction reduction;
@@ -249,7 +262,13 @@ Reduction compute_reduction(const fem::System& system, const ReductionOptions& o
   Stopwatch clock;
   const SparseMatrix stiffness = fem::restrict_to_free(system.assemble_stiffness(), constraints);
   const SparseMatrix mass = diagonal(fem::restrict_to_free(system.lumped_mass(), constraints));
-  const modal::ModeSet modes = lowest_modes(stiffness, mass, options, n_rigid);
+  // A held body: one factor of K serves the eigen-solves (shift 0) and the static images (the
+  // caller's, when it has one: the modal stage's). A free body (or a held one whose K turns out
+  // singular: a mechanism) factors K - sigma M per use.
+  modal::StiffnessFactors own_factors;
+  modal::CholmodFactor* stiffness_factor =
+      n_rigid == 0 ? (factors ? factors : &own_factors)->factor(system.variant(), stiffness) : nullptr;
+  const modal::ModeSet modes = lowest_modes(stiffness, mass, options, n_rigid, stiffness_factor);
   reduction.modes_s = clock.seconds();
   // Rigid-body modes first (omega = 0), then the elastic ones.
   const Index n_zero = modes.n_rigid();
@@ -277,7 +296,13 @@ Reduction compute_reduction(const fem::System& system, const ReductionOptions& o
   // Static images: one solve per pair row (kSolveBlock rows at once) and one for the load, only rows
   // B and C kept.
   const double lowest = modes.n_modes() > 0 ? reduction.omega[n_zero] : 0.0;
-  StaticFlexibility flexibility(stiffness, mass, modes.rigid_shapes, lowest);
+  std::optional<StaticFlexibility> flexibility_storage;
+  if (stiffness_factor && modes.rigid_shapes.cols() == 0) {
+    flexibility_storage.emplace(mass, *stiffness_factor);
+  } else {
+    flexibility_storage.emplace(stiffness, mass, modes.rigid_shapes, lowest);
+  }
+  StaticFlexibility& flexibility = *flexibility_storage;
   const Index n_free = stiffness.rows();
   reduction.pair_static.resize(c, c);
   reduction.output_static.resize(o, c);

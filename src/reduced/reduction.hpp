@@ -21,6 +21,10 @@
 #include "fem/system.hpp"
 #include "reduced/system.hpp"
 
+namespace crackle::modal {
+class StiffnessFactors;
+}
+
 namespace crackle::reduced {
 
 /// Which modes to compute.
@@ -82,9 +86,12 @@ std::pair<Vec3, Vec3> pair_tangents(const Vec3& normal);
 /// crack) free to move keeps its rigid-body modes as modes of frequency 0, first in the mode list, and
 /// the static images are those of the elastic flexibility (rigid motions projected out, HYBRID.md §2). Pairs: every split crack pair of the mesh when the variant is open,
 /// none otherwise. Outputs: 3 rows per point of `outputs` (see OutputPoint; a held DOF
-/// gives a zero entry). `load`: the load shape f_hat.
+/// gives a zero entry). `load`: the load shape f_hat. `factors`: where the factor of a held body's K
+/// is looked up (the modal stage's) and left for the next reduction of the same K; null: made and
+/// dropped here.
 Reduction compute_reduction(const fem::System& system, const ReductionOptions& options,
-                            const std::vector<OutputPoint>& outputs, const fem::LoadShape& load);
+                            const std::vector<OutputPoint>& outputs, const fem::LoadShape& load,
+                            modal::StiffnessFactors* factors = nullptr);
 
 /// The ReducedSystem of the first m computed modes (m <= n_computed_modes()) with the residual
 /// flexibility of the rest; the load images scaled by `load_scale`. Contact (penalties, gap,

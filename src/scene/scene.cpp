@@ -193,9 +193,10 @@ Param build_parameters() {
       choice("variants", "Linear limits to analyse: faces tied (uncracked) or free (open); open needs a crack.",
              {"uncracked", "open"}).list(1, 2).distinct()
           .defaults_to("[uncracked, open] with a crack, else [uncracked]", default_variants),
-      choice("solver", "Eigen-solver: slepc (Krylov-Schur; the one that runs under MPI) or arpack (Lanczos with "
-                       "CHOLMOD; the fastest on one process, docs/benchmarks.md section 3).",
-             {"slepc", "arpack"}).defaults_to("slepc"),
+      choice("solver", "Eigen-solver: slepc (Krylov-Schur; the one that runs under MPI), arpack (Lanczos with "
+                       "CHOLMOD; the fastest on one process, docs/benchmarks.md section 3) or auto (arpack on one "
+                       "process; slepc under mpirun or given SLEPc options such as -eps_tol).",
+             {"auto", "slepc", "arpack"}).defaults_to("auto"),
       choice("mass", "Mass matrix.", {"consistent", "lumped"}).defaults_to("consistent"),
     }),
     map_of("transient", "Explicit dynamics (MODEL.md eqs. 24-28) run by `crackle run`; optional.", {

@@ -67,7 +67,7 @@ struct BoundarySection {
 struct ModalSection {
   int modes = defaults::kModes;
   std::vector<std::string> variants;  ///< "uncracked" and/or "open"; defaulted by the loader
-  std::string solver = "slepc";       ///< slepc | arpack
+  std::string solver = "auto";        ///< auto | slepc | arpack
   std::string mass = "consistent";    ///< consistent | lumped
 };
 

@@ -664,6 +664,7 @@ StudyPlan plan_study(const std::string& text, const std::string& file) {
     key_document.remove("transient");
     key_document.remove("spectrum");  // the primer drops them too: the uncracked modes do not read them
     key_document.remove("sweep");
+    key_document.remove("accuracy");
     if (key_document["modal"].IsMap()) key_document["modal"].remove("variants");
     if (plan.shares_grid_lines)
       key_document.remove("crack");
@@ -675,6 +676,19 @@ StudyPlan plan_study(const std::string& text, const std::string& file) {
     primer.remove("transient");  // and what needs it: a modal solve is all the primer does
     primer.remove("spectrum");
     primer.remove("sweep");
+    primer.remove("accuracy");  // it needs the transient and spectrum sections
+    const bool modal_output = std::find(spec.outputs.begin(), spec.outputs.end(), "modal") != spec.outputs.end();
+    if (!modal_output && primer["mesh"].IsMap() && primer["mesh"]["box"].IsMap()) {
+      // The cases' run and sweep mesh a box uniformly where mesh.box.grading is auto; crackle modal
+      // grades it: the primer's modes would be of another mesh (never the cases' key).
+      YAML::Node box = primer["mesh"]["box"];
+      const YAML::Node grading = box["grading"];
+      if (!grading || (grading.IsScalar() && grading.Scalar() == "auto")) {
+        box["grading"] = "none";
+      } else if (grading.IsMap() && (!grading["mode"] || grading["mode"].Scalar() == "auto")) {
+        box["grading"]["mode"] = "none";
+      }
+    }
     if (!primer["modal"].IsMap()) primer["modal"] = YAML::Node(YAML::NodeType::Map);
     primer["modal"]["variants"] = YAML::Load("[uncracked]");
     study_case.primer_text = "# uncracked modes shared by the cases with modal cache key " +

@@ -144,18 +144,36 @@ TEST(CliEdges, QuietIsCommonToEveryCommandThatComputes) {
   fs::remove(study);
 }
 
+/// The eigen-solver modal.json says solved.
+std::string backend_of(const std::string& out) {
+  std::ifstream stream(fs::path(out) / "modal.json");
+  const std::string text((std::istreambuf_iterator<char>(stream)), std::istreambuf_iterator<char>());
+  const auto at = text.find("\"backend\"");
+  return at == std::string::npos ? "" : text.substr(at, 22);
+}
+
+// modal.solver: auto (the default) is ARPACK on one process; SLEPc options, however given, are read
+// and make it SLEPc (the user who tunes -eps_* wants that solver, not a silent ARPACK).
 TEST(CliEdges, PetscOptionsPassAfterTheSeparatorOrWithPetsc) {
   const fs::path scene = small_scene();
   const std::string out = (fs::temp_directory_path() / ("crackle-cli-edges-out-" + std::to_string(::getpid()))).string();
+  const Result plain = crackle("modal " + scene.string() + " -o " + out);
+  EXPECT_EQ(plain.exit_code, 0) << plain.output;
+  EXPECT_NE(backend_of(out).find("arpack"), std::string::npos) << backend_of(out);
   for (const std::string channel : {"-- -eps_view", "--petsc -eps_view", "--petsc=\"-eps_view -eps_tol 1e-9\""}) {
     SCOPED_TRACE(channel);
     const Result result = crackle("modal " + scene.string() + " -o " + out + " " + channel);
     EXPECT_EQ(result.exit_code, 0) << result.output;
     EXPECT_NE(result.output.find("EPS Object"), std::string::npos) << result.output;
+    EXPECT_NE(backend_of(out).find("slepc"), std::string::npos) << backend_of(out);
   }
   const Result environment = crackle("modal " + scene.string() + " -o " + out, "PETSC_OPTIONS=-eps_view");
   EXPECT_EQ(environment.exit_code, 0) << environment.output;
   EXPECT_NE(environment.output.find("EPS Object"), std::string::npos);
+  // The scene's own choice stands.
+  const Result arpack = crackle("modal " + scene.string() + " -o " + out + " --solver arpack");
+  EXPECT_EQ(arpack.exit_code, 0) << arpack.output;
+  EXPECT_NE(backend_of(out).find("arpack"), std::string::npos) << backend_of(out);
   fs::remove_all(out);
   fs::remove(scene);
 }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/errors.hpp"
+#include "modal/cholmod_factor.hpp"
 #include "modal/eigensolver.hpp"
 #include "modal/modal.hpp"
 
@@ -91,6 +92,33 @@ TEST(Eigensolver, ArpackFixedFixedBar) {
   EigenOptions options;
   options.solver = Solver::arpack;
   solve_fixed_fixed_bar(options);
+}
+
+// The caller's factor of K serves several solves (the reduced model's eigen-solves and static
+// images): the spectrum is the exact one, and a factor of another matrix is refused.
+TEST(Eigensolver, ArpackSolvesWithTheCallersFactor) {
+  const BarPencil pencil = bar_pencil(2000, false);
+  CholmodFactor factor(pencil.stiffness, pencil.mass, 0.0, "test");
+  EigenOptions options;
+  options.solver = Solver::arpack;
+  options.shift = 0.0;
+  options.factor = &factor;
+  for (int pairs : {4, 8}) {
+    options.n_eigenpairs = pairs;
+    const EigenPairs solved = solve_eigenpairs(pencil.stiffness, pencil.mass, options);
+    ASSERT_EQ(solved.eigenvalues.size(), pairs);
+    expect_spectrum(solved, pencil, 0, 1e-10);
+  }
+  // The same factor for a static solve afterwards: K x = b against the dense solution.
+  const VectorX b = VectorX::LinSpaced(pencil.stiffness.rows(), 1.0, 2.0);
+  VectorX x(b.size());
+  factor.solve(b.data(), x.data());
+  EXPECT_LT((pencil.stiffness * x - b).norm(), 1e-10 * b.norm());
+  options.shift = -1.0;
+  EXPECT_THROW(solve_eigenpairs(pencil.stiffness, pencil.mass, options), SolverError);
+  const BarPencil other = bar_pencil(1000, false);
+  options.shift = 0.0;
+  EXPECT_THROW(solve_eigenpairs(other.stiffness, other.mass, options), SolverError);
 }
 
 TEST(Eigensolver, BackendsAgreeToRoundOff) {

@@ -28,7 +28,7 @@ crack:
 modal:                               # optional
   modes: 10                  # lowest modes per variant (>= 1)
   variants: [uncracked, open]  # default: both when the scene has a crack, [uncracked] otherwise; "open" without a crack is an error
-  solver: slepc              # slepc (default) | arpack
+  solver: slepc              # auto (default) | slepc | arpack
   mass: consistent           # consistent (default) | lumped
 )";
 
@@ -256,7 +256,7 @@ TEST(Scene, BadScenesGiveOneExactLine) {
       // the modal section
       {kBody + "modal: {modes: 0}\n", "beam.yaml:7: modal.modes: expected a positive integer, got 0"},
       {kBody + "modal: {solver: lapack}\n",
-       "beam.yaml:7: modal.solver: expected one of slepc, arpack, got 'lapack' (did you mean 'arpack'?)"},
+       "beam.yaml:7: modal.solver: expected one of auto, slepc, arpack, got 'lapack' (did you mean 'arpack'?)"},
       {kBody + "modal: {mass: consistant}\n",
        "beam.yaml:7: modal.mass: expected one of consistent, lumped, got 'consistant' (did you mean "
        "'consistent'?)"},

@@ -3,6 +3,9 @@
 // stability (the monodromy against Hill's method), and a period-doubled (nu = 2) branch.
 #include <gtest/gtest.h>
 
+#include <optional>
+#include <utility>
+
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -687,6 +690,29 @@ TEST(Continuation, PeriodDoublingOfABilinearOscillator) {
   EXPECT_NEAR(two.ratios(0).half, std::abs(ref[1]) / std::abs(ref[2]), 0.1 * std::abs(ref[1]) / std::abs(ref[2]));
 }
 
+/// Continues the period-two branch of `hb2` from `start` past Omega = 2.5 and returns {its solution at
+/// 2.5 (Newton from the branch's two points around it), the solution Newton finds at 2.5 from the
+/// period-one point's critical mode (amplitude `size`)}: two routes that should give one solution.
+/// Empty when the branch did not pass 2.5.
+std::optional<std::pair<Solution, Solution>> two_routes_to_two_and_a_half(const reduced::ReducedSystem& s, const HarmonicBalance& hb1,
+                                                           const HarmonicBalance& hb2, const Solution& start,
+                                                           const ContinuationOptions& copt, double size) {
+  std::vector<BranchPoint> period_two;
+  continue_branch(hb2, start.omega, 2.6, copt, [&](const BranchPoint& point) {
+    period_two.push_back(point);
+    return point.solution.omega < 2.5;
+  }, &start);
+  if (period_two.size() < 2 || period_two.back().solution.omega < 2.5) return std::nullopt;
+  const BranchPoint& after = period_two.back();
+  const BranchPoint& before = period_two[period_two.size() - 2];
+  const double w = (2.5 - before.solution.omega) / (after.solution.omega - before.solution.omega);
+  const Solution fixed = hb2.solve(2.5, (1.0 - w) * before.solution.gaps + w * after.solution.gaps);
+  const Solution one = hb1.solve(2.5);
+  const Solution from_mode =
+      hb2.solve(2.5, period_doubled_guess(s, one, hb1.hill_stability(one), hb2.options().harmonics, size));
+  return std::make_pair(fixed, from_mode);
+}
+
 TEST(Continuation, BranchOffAtAPeriodDoublingReachesTheFixedFrequencySolution) {
   // The oscillator of the test above. From the period-one solution just past its doubling, written in
   // nu = 2 harmonics, Keller's corrector along the critical mode (Omega free) lands on the period-two
@@ -717,20 +743,9 @@ TEST(Continuation, BranchOffAtAPeriodDoublingReachesTheFixedFrequencySolution) {
   EXPECT_GT(start.omega, branch[doubling - 1].solution.omega - 0.05);
   EXPECT_LT(start.omega, 2.5);
 
-  std::vector<BranchPoint> period_two;
-  const auto to_two_and_a_half = [&](const BranchPoint& point) {
-    period_two.push_back(point);
-    return point.solution.omega < 2.5;
-  };
-  continue_branch(hb2, start.omega, 2.6, copt, to_two_and_a_half, &start);
-  ASSERT_GE(period_two.size(), 2u);
-  const BranchPoint& after = period_two.back();
-  const BranchPoint& before = period_two[period_two.size() - 2];
-  ASSERT_GE(after.solution.omega, 2.5);
-  const double w = (2.5 - before.solution.omega) / (after.solution.omega - before.solution.omega);
-  const Solution fixed = hb2.solve(2.5, (1.0 - w) * before.solution.gaps + w * after.solution.gaps);
-  const Solution from_mode = hb2.solve(2.5, period_doubled_guess(s, hb1.solve(2.5), hb1.hill_stability(hb1.solve(2.5)),
-                                                                 opt2.harmonics, size));
+  const auto routes = two_routes_to_two_and_a_half(s, hb1, hb2, start, copt, size);
+  ASSERT_TRUE(routes) << "the period-two branch did not pass Omega = 2.5";
+  const auto& [fixed, from_mode] = *routes;
   std::printf("  Omega = 2.5: A1/2 from the branch %.8e, from the critical mode %.8e\n", fixed.amplitude(0, 0.5),
               from_mode.amplitude(0, 0.5));
   EXPECT_NEAR(fixed.amplitude(0, 0.5), from_mode.amplitude(0, 0.5), 1e-8 * from_mode.amplitude(0, 0.5));
@@ -768,20 +783,10 @@ TEST(BranchSwitching, ThePeriodTwoStartIsFoundWhereTheOddBlockTurnsSingular) {
   EXPECT_EQ(odd_part(embedded, odd_unknowns(s.n_rows(), opt2.harmonics)).norm(), 0.0);
   EXPECT_EQ(odd_unknowns(s.n_rows(), opt2.harmonics).size(), static_cast<std::size_t>(2 * 10 * s.n_rows()));
   // Continued up, the branch passes 2.5 through the fixed-frequency solution.
-  std::vector<BranchPoint> period_two;
-  continue_branch(hb2, start->omega, 2.6, copt, [&](const BranchPoint& point) {
-    period_two.push_back(point);
-    return point.solution.omega < 2.5;
-  }, &*start);
-  ASSERT_GE(period_two.size(), 2u);
-  const BranchPoint& after = period_two.back();
-  const BranchPoint& before = period_two[period_two.size() - 2];
-  ASSERT_GE(after.solution.omega, 2.5);
-  const double w = (2.5 - before.solution.omega) / (after.solution.omega - before.solution.omega);
-  const Solution fixed = hb2.solve(2.5, (1.0 - w) * before.solution.gaps + w * after.solution.gaps);
   const double size = branch[doubling].solution.gaps.cwiseAbs().maxCoeff();
-  const Solution from_mode = hb2.solve(2.5, period_doubled_guess(s, hb1.solve(2.5), hb1.hill_stability(hb1.solve(2.5)),
-                                                                 opt2.harmonics, size));
+  const auto routes = two_routes_to_two_and_a_half(s, hb1, hb2, *start, copt, size);
+  ASSERT_TRUE(routes) << "the period-two branch did not pass Omega = 2.5";
+  const auto& [fixed, from_mode] = *routes;
   EXPECT_NEAR(fixed.amplitude(0, 0.5), from_mode.amplitude(0, 0.5), 1e-8 * from_mode.amplitude(0, 0.5));
   // Before the doubling there is no period-two branch to switch to.
   const std::vector<BranchPoint> stable(branch.begin(), branch.begin() + static_cast<std::ptrdiff_t>(doubling) - 1);
