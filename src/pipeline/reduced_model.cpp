@@ -1,4 +1,5 @@
 #include "pipeline/reduced_model.hpp"
+#include "pipeline/stages.hpp"
 
 #include <cmath>
 
@@ -12,7 +13,6 @@
 namespace crackle::pipeline {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 /// The excitation's load shape for a unit total force (the amplitude scales it afterwards).
 fem::LoadShape unit_load(const scene::Scene& scene, const Model& model, const fem::System& system) {
@@ -35,16 +35,6 @@ double max_frequency(const scene::Scene& scene, double excitation_frequency_hz) 
   if (reduced.modes > 0) return 0.0;  // the time step follows the highest retained mode
   throw InputError(scene.file + ": transient.reduced.max_frequency: expected a frequency in Hz (or "
                    "transient.reduced.modes) without a harmonic excitation, got auto");
-}
-
-/// Damping from alpha/beta or a ratio at a frequency in Hz (a ratio at a mode: left to the caller).
-transient::RayleighDamping damping_of(const scene::Scene& scene) {
-  const scene::DampingSection& damping = scene.transient->damping;
-  if (!damping.ratio) return {damping.alpha, damping.beta};
-  if (!damping.at_hz) return {};
-  const double omega = 2.0 * kPi * *damping.at_hz;
-  return damping.type == "stiffness" ? transient::stiffness_proportional_damping(*damping.ratio, omega)
-                                     : transient::mass_proportional_damping(*damping.ratio, omega);
 }
 
 /// The cached reduction when it holds the modes asked.
@@ -179,7 +169,11 @@ ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, 
     result.system.friction_coefficient = contact_options.friction_coefficient;
     result.system.initial_gap.setConstant(contact_options.initial_gap);
   }
-  const transient::RayleighDamping damping = damping_of(scene);
+  // Damping from alpha/beta or a ratio at a frequency in Hz; a ratio at a mode is left to the caller
+  // (who has the modes: scene_damping with them).
+  const scene::DampingSection& scene_ratio = section.damping;
+  const transient::RayleighDamping damping =
+      scene_ratio.ratio && !scene_ratio.at_hz ? transient::RayleighDamping{} : scene_damping(scene, std::nullopt);
   result.system.rayleigh_alpha = damping.alpha;
   result.system.rayleigh_beta = damping.beta;
   result.initial_displacement = VectorX::Zero(modes);
