@@ -223,8 +223,13 @@ bool petsc_initialised() {
   return initialised == PETSC_TRUE;
 }
 
-/// Ends crackle's SLEPc session (SlepcFinalize, and PetscFinalize only if SLEPc started PETSc).
+/// Waits for a factorisation that an interruption left running (core/interrupt.hpp), then ends
+/// crackle's SLEPc session (SlepcFinalize, and PetscFinalize only if SLEPc started PETSc).
 void shutdown() {
+  {
+    const py::gil_scoped_release release;
+    wait_for_abandoned_work();
+  }
   if (slepc_session) session_ended = true;
   slepc_session.reset();
 }
@@ -603,7 +608,9 @@ PYBIND11_MODULE(_crackle, module) {
     SlepcInitialized(&initialised);
     return initialised == PETSC_TRUE;
   });
-  module.def("shutdown", &shutdown, "Ends crackle's SLEPc session, if it started one (atexit).");
+  module.def("background_work", &background_work,
+             "Factorisations still running on workers that an interruption left behind (core/interrupt.hpp).");
+  module.def("shutdown", &shutdown, "Waits for work an interruption left running, then ends crackle's SLEPc session, if it started one (atexit).");
   module.def("exit_code", [](const std::string& kind) {
     if (kind == "input") return exit_code_for(InputError(""));
     if (kind == "solver") return exit_code_for(SolverError(""));

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "core/errors.hpp"
+#include "core/interrupt.hpp"
 #include "fem/element_basis.hpp"
 
 namespace crackle::fem {
@@ -203,22 +204,34 @@ SparseMatrix make_pattern(const NodeGraph& graph, bool block) {
   Index* row_start = matrix.outerIndexPtr();
   Index* columns = matrix.innerIndexPtr();
   double* values = matrix.valuePtr();
-#pragma omp parallel for schedule(dynamic, 256)
-  for (Index r = 0; r < n; ++r) {
-    const std::int64_t begin = graph.neighbour_start[r];
-    const Index degree = graph.degree(r);
-    for (int c = 0; c < 3; ++c) {
-      const std::int64_t start = 3 * per_block * begin + static_cast<std::int64_t>(c) * per_block * degree;
-      row_start[3 * r + c] = static_cast<Index>(start);
-      for (Index k = 0; k < degree; ++k) {
-        const Index s = graph.neighbours[begin + k];
-        for (int d = 0; d < per_block; ++d) {
-          columns[start + per_block * k + d] = 3 * s + (block ? d : c);
-          values[start + per_block * k + d] = 0.0;
+  // In blocks of rows, with a host's stop polled between them: the first touch of a pattern of a
+  // gigabyte takes about a second.
+  constexpr Index kBlock = 4096;
+  std::atomic<bool> stopped{false};
+#pragma omp parallel
+  for (Index first = 0; first < n; first += kBlock) {
+#pragma omp master
+    if (interrupt_requested()) stopped = true;
+    const Index last = std::min(first + kBlock, n);
+#pragma omp for schedule(dynamic, 256)
+    for (Index r = first; r < last; ++r) {
+      if (stopped) continue;
+      const std::int64_t begin = graph.neighbour_start[r];
+      const Index degree = graph.degree(r);
+      for (int c = 0; c < 3; ++c) {
+        const std::int64_t start = 3 * per_block * begin + static_cast<std::int64_t>(c) * per_block * degree;
+        row_start[3 * r + c] = static_cast<Index>(start);
+        for (Index k = 0; k < degree; ++k) {
+          const Index s = graph.neighbours[begin + k];
+          for (int d = 0; d < per_block; ++d) {
+            columns[start + per_block * k + d] = 3 * s + (block ? d : c);
+            values[start + per_block * k + d] = 0.0;
+          }
         }
       }
     }
   }
+  if (stopped) throw Interrupted("interrupted");
   row_start[3 * n] = static_cast<Index>(nnz);
   return matrix;
 }
@@ -263,6 +276,7 @@ SparseMatrix assemble(Kind kind, const mesh::Mesh& mesh, const mesh::DofMap& dof
   const std::vector<std::vector<Index>> classes = colour(graph);
   SparseMatrix matrix = make_pattern(graph, kind == Kind::stiffness);
   const double t1 = omp_get_wtime();
+  poll_interrupt();  // between the phases, outside the parallel regions (a host may stop a run)
 
   // Brick cache: one element matrix per distinct (hx, hy, hz, region), on a canonical brick.
   std::vector<int> matrix_id;
@@ -307,12 +321,13 @@ SparseMatrix assemble(Kind kind, const mesh::Mesh& mesh, const mesh::DofMap& dof
     }
   }
   const double t2 = omp_get_wtime();
+  poll_interrupt();
 
   // Scatter, one colour class at a time: no two elements of a class share a row, so the threads
   // never write to the same entry, and every entry sums its contributions in colour order
   // whatever the thread count (bitwise identical results).
   double* values = matrix.valuePtr();
-  std::atomic<bool> failed{false};
+  std::atomic<bool> failed{false}, stopped{false};
   std::string error;
   int n_threads = 1;
 #pragma omp parallel
@@ -323,9 +338,11 @@ SparseMatrix assemble(Kind kind, const mesh::Mesh& mesh, const mesh::DofMap& dof
     std::vector<double> coords(3 * npe);
     std::vector<Index> positions(static_cast<std::size_t>(npe) * npe);
     for (const std::vector<Index>& members : classes) {
+#pragma omp master
+      if (interrupt_requested()) stopped = true;  // a host's stop, between the classes
 #pragma omp for schedule(dynamic, 4)
       for (std::size_t i = 0; i < members.size(); ++i) {
-        if (failed) continue;
+        if (failed || stopped) continue;
         const Index e = members[i];
         try {
           const MatrixX* element = &local;
@@ -371,6 +388,7 @@ SparseMatrix assemble(Kind kind, const mesh::Mesh& mesh, const mesh::DofMap& dof
       }
     }
   }
+  if (stopped) throw Interrupted("interrupted");
   if (failed) throw InputError(error);
   const double t3 = omp_get_wtime();
 

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "core/errors.hpp"
+#include "core/interrupt.hpp"
 
 namespace crackle::fem {
 
@@ -61,6 +62,7 @@ SparseMatrix restrict_to_free(const SparseMatrix& matrix, const Constraints& con
   // Count, then fill: free_index is increasing, so sorted columns stay sorted.
   std::vector<Index> row_start(n + 1, 0);
   for (Index i = 0; i < n; ++i) {
+    if ((i & 4095) == 4095) poll_interrupt();  // a large K takes seconds (a host may stop it)
     Index count = 0;
     for (SparseMatrix::InnerIterator it(matrix, constraints.free_dofs[i]); it; ++it) {
       if (constraints.free_index[it.col()] >= 0) ++count;
@@ -73,6 +75,7 @@ SparseMatrix restrict_to_free(const SparseMatrix& matrix, const Constraints& con
   Index* columns = result.innerIndexPtr();
   double* values = result.valuePtr();
   for (Index i = 0; i < n; ++i) {
+    if ((i & 4095) == 4095) poll_interrupt();
     Index k = row_start[i];
     for (SparseMatrix::InnerIterator it(matrix, constraints.free_dofs[i]); it; ++it) {
       const Index column = constraints.free_index[it.col()];

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "core/errors.hpp"
+#include "core/interrupt.hpp"
 #include "core/resources.hpp"
 #include "fem/system.hpp"
 
@@ -99,6 +100,7 @@ VariantResult solve_variant(const fem::System& system, const ModalOptions& optio
   solved.dofs = system.dofs();
   solved.constraints = system.constraints();
   const SparseMatrix stiffness = fem::restrict_to_free(system.assemble_stiffness(), solved.constraints);
+  poll_interrupt();
   if (options.lumped_mass) {
     const VectorX lumped = fem::restrict_to_free(system.lumped_mass(), solved.constraints);
     solved.mass.resize(lumped.size(), lumped.size());
@@ -114,6 +116,7 @@ VariantResult solve_variant(const fem::System& system, const ModalOptions& optio
   // Both variants: the key is K and M, so an open solve is shared by the cases that keep the crack
   // (a study over excitation frequency, amplitude or damping) and simply misses when the crack changes.
   const bool cached = !options.cache_directory.empty();
+  poll_interrupt();
   const std::uint64_t key = cached ? problem_key(stiffness, solved.mass, options) : 0;
   std::optional<ModeSet> from_cache;
   if (cached) from_cache = load_cached_modes(options.cache_directory, key, solved.constraints.n_free());

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/errors.hpp"
+#include "core/interrupt.hpp"
 #include "core/resources.hpp"
 #include "modal/cholmod_factor.hpp"
 #include "modal/eigensolver.hpp"
@@ -180,6 +181,21 @@ PetscErrorCode apply_cholmod_factor(PC pc, Vec x, Vec y) {
   return result;
 }
 
+/// SLEPc's basic stopping test, with a poll for a host's stop after each restart
+/// (core/interrupt.hpp): a stop ends the solve as "converged by the user" and sets the flag that
+/// `context` points to; the caller throws Interrupted after EPSSolve returns.
+PetscErrorCode stop_when_interrupted(EPS eps, PetscInt iterations, PetscInt max_iterations, PetscInt n_converged,
+                                     PetscInt n_wanted, EPSConvergedReason* reason, void* context) {
+  try {
+    poll_interrupt();
+  } catch (const Interrupted&) {
+    *static_cast<bool*>(context) = true;
+    *reason = EPS_CONVERGED_USER;
+    return 0;
+  }
+  return EPSStoppingBasic(eps, iterations, max_iterations, n_converged, n_wanted, reason, nullptr);
+}
+
 }  // namespace
 
 EigenPairs solve_eigenpairs_slepc(const SparseMatrix& stiffness, const SparseMatrix& mass,
@@ -283,7 +299,12 @@ EigenPairs solve_eigenpairs_slepc(const SparseMatrix& stiffness, const SparseMat
   result.factorization_s = watch.seconds();
 
   watch.restart();
+  bool interrupted = false;
+  if (interrupt_check_installed()) {
+    CRACKLE_PETSC(kContext, EPSSetStoppingTestFunction(eps, stop_when_interrupted, &interrupted, nullptr));
+  }
   CRACKLE_PETSC(kContext, EPSSolve(eps));
+  if (interrupted) throw Interrupted("interrupted");
   PetscInt n_converged = 0;
   PetscInt iterations = 0;
   CRACKLE_PETSC(kContext, EPSGetConverged(eps, &n_converged));

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/errors.hpp"
+#include "core/interrupt.hpp"
 #include "modal/cholmod_factor.hpp"
 #include "modal/eigensolver.hpp"
 #include "modal/modal.hpp"
@@ -119,6 +120,69 @@ TEST(Eigensolver, ArpackSolvesWithTheCallersFactor) {
   const BarPencil other = bar_pencil(1000, false);
   options.shift = 0.0;
   EXPECT_THROW(solve_eigenpairs(other.stiffness, other.mass, options), SolverError);
+}
+
+namespace {
+int polls = 0;
+int polls_allowed = 0;
+/// A host's check that asks to stop from its (polls_allowed + 1)-th call on.
+bool stop_after_allowed_polls() { return ++polls > polls_allowed; }
+}  // namespace
+
+TEST(Eigensolver, AHostsInterruptCheckFactorisesOnAWorkerAndStopsAtOnce) {
+  // With a host's check installed (the Python module) the numeric factorisation runs on a worker
+  // (core/interrupt.hpp): the same factor as on the caller's thread, and a stop leaves at once.
+  // The 7-point Laplacian of a 16^3 grid plus the identity: a supernodal factor, as for a body.
+  const Index side = 16, n = side * side * side;
+  std::vector<Eigen::Triplet<double>> entries;
+  const auto at = [side](Index i, Index j, Index k) { return (i * side + j) * side + k; };
+  const auto couple = [&entries](Index a, Index b) {
+    entries.emplace_back(a, b, -1.0);
+    entries.emplace_back(b, a, -1.0);
+  };
+  for (Index i = 0; i < side; ++i) {
+    for (Index j = 0; j < side; ++j) {
+      for (Index k = 0; k < side; ++k) {
+        const Index row = at(i, j, k);
+        entries.emplace_back(row, row, 7.0);
+        if (i + 1 < side) couple(row, at(i + 1, j, k));
+        if (j + 1 < side) couple(row, at(i, j + 1, k));
+        if (k + 1 < side) couple(row, at(i, j, k + 1));
+      }
+    }
+  }
+  SparseMatrix laplacian(n, n);
+  laplacian.setFromTriplets(entries.begin(), entries.end());
+  const SparseMatrix no_mass;
+  const VectorX b = VectorX::LinSpaced(n, 1.0, 2.0);
+  VectorX here(n), on_worker(n);
+  CholmodFactor local(laplacian, no_mass, 0.0, "test");
+  ASSERT_TRUE(local.supernodal());
+  local.solve(b.data(), here.data());
+  EXPECT_LT((laplacian * here - b).norm(), 1e-12 * b.norm());
+  const InterruptCheck previous = set_interrupt_check(&stop_after_allowed_polls);
+  polls = 0;
+  polls_allowed = 1000000;
+  CholmodFactor factor(laplacian, no_mass, 0.0, "test");
+  factor.solve(b.data(), on_worker.data());
+  EXPECT_EQ((here - on_worker).norm(), 0.0);
+  EXPECT_GE(polls, 2) << "no poll before the numeric factorisation";
+  polls = polls_allowed = 0;  // a stop asked for before the factorisation returns at once
+  EXPECT_THROW(CholmodFactor(laplacian, no_mass, 0.0, "test"), Interrupted);
+  const BarPencil pencil = bar_pencil(2000, false);
+  // A stop at the second poll: in the factorisation, at SLEPc's next restart or ARPACK's next step.
+  EigenOptions options;
+  options.n_eigenpairs = 4;
+  options.shift = -1.0;
+  for (const Solver solver : {Solver::slepc, Solver::arpack}) {
+    options.solver = solver;
+    polls = 0;
+    polls_allowed = 1;
+    EXPECT_THROW(solve_eigenpairs(pencil.stiffness, pencil.mass, options), Interrupted);
+    EXPECT_GE(polls, 2) << "the solve stopped before its factorisation was made";
+  }
+  set_interrupt_check(previous);
+  wait_for_abandoned_work();
 }
 
 TEST(Eigensolver, BackendsAgreeToRoundOff) {
