@@ -186,9 +186,7 @@ PetscErrorCode apply_cholmod_factor(PC pc, Vec x, Vec y) {
 /// `context` points to; the caller throws Interrupted after EPSSolve returns.
 PetscErrorCode stop_when_interrupted(EPS eps, PetscInt iterations, PetscInt max_iterations, PetscInt n_converged,
                                      PetscInt n_wanted, EPSConvergedReason* reason, void* context) {
-  try {
-    poll_interrupt();
-  } catch (const Interrupted&) {
+  if (interrupt_requested()) {
     *static_cast<bool*>(context) = true;
     *reason = EPS_CONVERGED_USER;
     return 0;
