@@ -223,6 +223,14 @@ std::vector<fs::path> run_forward_cases(const YAML::Node& base, const std::vecto
   // Only the tables are read: a sweep case draws no PNG per probe (a plan's dozens of sensors would
   // cost several times the sweep in gnuplot starts).
   if (command == "sweep" && document["sweep"]) document["sweep"]["plots"] = false;
+  // A forward sweep runs on the scene's mesh as written (its error is identify's own p-refinement
+  // estimate): transient.model: auto would give every case the route's finer mesh and its
+  // refinement sweeps (crackle sweep's default).
+  const YAML::Node& view = document;
+  const YAML::Node transient = view["transient"];
+  if (command == "sweep" && transient.IsMap() && (!transient["model"] || transient["model"].Scalar() == "auto")) {
+    document["transient"]["model"] = "reduced";
+  }
   std::vector<std::pair<std::string, std::vector<std::string>>> values;  // key path -> one text per case
   const auto add = [&](const std::string& path, const std::string& text, std::size_t c) {
     auto it = std::find_if(values.begin(), values.end(), [&](const auto& entry) { return entry.first == path; });

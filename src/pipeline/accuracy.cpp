@@ -1,6 +1,5 @@
 #include "pipeline/accuracy.hpp"
 
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -15,6 +14,7 @@
 #include "core/resources.hpp"
 #include "io/files.hpp"
 #include "pipeline/distributed_run.hpp"
+#include "pipeline/refinement.hpp"
 #include "pipeline/run_scene.hpp"
 
 namespace crackle::pipeline {
@@ -22,31 +22,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// Rate of the mesh levels: the element order is raised by one per level, so the observed "order"
-/// is the rate ln((Q1 - Q2)/(Q2 - Q3)) per order; sane when the error at least halves per order.
-constexpr double kOrderLevelRatio = 2.718281828459045;
-const double kRateMin = std::log(2.0), kRateMax = 20.0;
-
-/// One setting of the numerical parameters: the element order, and how many times the reduced
-/// model's band, the steps per period (each x2) and the penalty (x4) were refined.
-struct Setting {
-  int order = 0;
-  int band = 0, steps = 0, penalty = 0;
-  std::string key() const {
-    return "p" + std::to_string(order) + "-b" + std::to_string(band) + "-s" + std::to_string(steps) + "-k" +
-           std::to_string(penalty);
-  }
-};
 
 /// Whether and how the scene's signatures are estimated.
-struct Plan {
-  bool estimate = false;
-  std::string reason;  ///< why not
-  std::optional<double> tolerance;
-};
-
-Plan accuracy_plan(const scene::Scene& scene, const RunRoute& route) {
-  Plan plan;
+EstimatePlan accuracy_plan(const scene::Scene& scene, const RunRoute& route) {
+  EstimatePlan plan;
   const std::optional<scene::ExcitationSection>& excitation = scene.transient->excitation;
   if (!scene.spectrum || !excitation || excitation->kind != "harmonic") {
     plan.reason = "no harmonic signature (no spectrum: section or no harmonic excitation)";
@@ -79,27 +58,20 @@ class Runs {
  public:
   Runs(const scene::Scene& scene, const std::vector<scene::Override>& overrides, const RunCommandOptions& options,
        std::ostream& out)
-      : scene_(scene), overrides_(overrides), options_(options), out_(out) {
-    scratch_ = options.output_directory / ("accuracy.tmp." + std::to_string(::getpid()));
-    cache_ = options.modal_cache.empty() ? scratch_ / "cache" : options.modal_cache;
-  }
-  ~Runs() {
-    std::error_code ignored;
-    fs::remove_all(scratch_, ignored);
-  }
+      : scene_(scene), overrides_(overrides), options_(options), out_(out),
+        folders_(options.output_directory, options.modal_cache) {}
 
   /// The outcome of a setting (run now unless it ran before); `first` runs into the output folder.
   const RunOutcome& get(const Setting& setting, bool first = false) {
     const auto found = outcomes_.find(setting.key());
     if (found != outcomes_.end()) return found->second;
     RunCommandOptions options = options_;
-    options.modal_cache = cache_;
+    options.modal_cache = folders_.cache();
+    options.output_directory = folders_.folder(setting, first);
     std::vector<scene::Override> overrides = overrides_;
     if (!first) {
       for (const scene::Override& level : level_overrides(setting)) overrides.push_back(level);
-      options.output_directory = scratch_ / setting.key();
       options.progress = false;
-      fs::create_directories(options.output_directory);
     }
     const scene::Scene scene = first ? scene_ : scene::load_scene(options_.scene_path, overrides);
     NullStream silent;
@@ -111,7 +83,6 @@ class Runs {
       out_ << "accuracy: refinement run " << describe(setting) << ": " << std::setprecision(3) << outcome.wall_s << " s\n";
       refinement_s_ += outcome.wall_s;
     }
-    directories_[setting.key()] = options.output_directory;
     runs_.push_back({{"setting", describe(setting)},
                      {"order", setting.order},
                      {"max_frequency_hz", outcome.max_frequency_hz},
@@ -125,15 +96,7 @@ class Runs {
     return outcomes_.emplace(setting.key(), std::move(outcome)).first->second;
   }
 
-  /// Moves the files of a setting's run into the output folder (the setting the tolerance settled on).
-  void adopt(const Setting& setting) {
-    const fs::path from = directories_.at(setting.key());
-    if (from == options_.output_directory) return;
-    for (const fs::directory_entry& entry : fs::directory_iterator(from)) {
-      if (!entry.is_regular_file()) continue;
-      fs::rename(entry.path(), options_.output_directory / entry.path().filename());
-    }
-  }
+  void adopt(const Setting& setting) const { folders_.adopt(setting); }
 
   std::string describe(const Setting& setting) const {
     std::string text = "order " + std::to_string(setting.order);
@@ -154,14 +117,8 @@ class Runs {
     return scene_.transient->reduced.steps_per_period << setting.steps;
   }
   std::vector<scene::Override> level_overrides(const Setting& setting) const {
-    std::vector<scene::Override> levels;
     const RunOutcome& base = outcomes_.at(first_key_);  // the scene's own run comes first
-    if (box_mesh()) levels.push_back({"mesh.box.order", std::to_string(setting.order)});
-    if (setting.band) {
-      const int modes = scene_.transient->reduced.modes;
-      if (modes > 0) levels.push_back({"transient.reduced.modes", std::to_string(modes << setting.band)});
-      else levels.push_back({"transient.reduced.max_frequency", format_number(base.max_frequency_hz * (1 << setting.band))});
-    }
+    std::vector<scene::Override> levels = order_and_band_overrides(scene_, setting, base.max_frequency_hz);
     if (setting.steps) levels.push_back({"transient.reduced.steps_per_period", std::to_string(steps_per_period(setting))});
     if (setting.penalty) {
       levels.push_back({"crack.contact.penalty", format_number(base.normal_penalty * (1 << (2 * setting.penalty)))});
@@ -173,11 +130,10 @@ class Runs {
   std::vector<scene::Override> overrides_;
   RunCommandOptions options_;
   std::ostream& out_;
-  fs::path scratch_, cache_;
+  RefinementFolders folders_;
   std::map<std::string, RunOutcome> outcomes_;
   std::string first_key_;
   RunReuse reuse_;
-  std::map<std::string, fs::path> directories_;
   nlohmann::json runs_ = nlohmann::json::array();
   double refinement_s_ = 0.0;
 };
@@ -193,46 +149,15 @@ double signature(const RunOutcome& outcome, int probe, int q) {
   return outcome.probes[probe].value[q];
 }
 
-/// The runs each component of a setting's estimate needs.
-struct Neighbours {
-  std::optional<Setting> coarse, coarser;  ///< the two lower orders (mesh)
-  Setting band, steps, penalty;
-};
-
-Neighbours neighbours(const Setting& setting, bool box_mesh) {
-  Neighbours n;
-  if (box_mesh && setting.order >= 3) {
-    n.coarse = setting;
-    n.coarse->order -= 1;
-    n.coarser = setting;
-    n.coarser->order -= 2;
-  }
-  n.band = n.steps = n.penalty = setting;
-  n.band.band += 1;
-  n.steps.steps += 1;
-  n.penalty.penalty += 1;
-  return n;
-}
-
 /// The components of one signature at a setting.
 accuracy::Estimate estimate_of(const std::string& quantity, Runs& runs, const Setting& setting, int probe, int q) {
   const RunOutcome& run = runs.get(setting);
   const double value = signature(run, probe, q);
   const Neighbours n = neighbours(setting, runs.box_mesh());
   std::vector<accuracy::Component> components;
-  if (n.coarse) {
-    components.push_back(accuracy::three_level("mesh", signature(runs.get(*n.coarser), probe, q),
-                                               signature(runs.get(*n.coarse), probe, q), value, kOrderLevelRatio,
-                                               kRateMin, kRateMax));
-  } else {
-    accuracy::Component mesh;
-    mesh.name = "mesh";
-    mesh.value = mesh.refined = value;
-    mesh.verified = mesh.asymptotic = false;
-    mesh.reason = runs.box_mesh() ? "not estimated below element order 3 (the levels are the two lower orders)"
-                                  : "not estimated on a Gmsh mesh (no refinement family)";
-    components.push_back(mesh);
-  }
+  components.push_back(n.coarse ? mesh_component(value, true, signature(runs.get(*n.coarser), probe, q),
+                                                 signature(runs.get(*n.coarse), probe, q), runs.box_mesh())
+                                : mesh_component(value, false, 0.0, 0.0, runs.box_mesh()));
   if (probe >= 0) {  // the modal stage does not depend on the reduced model's settings
     components.push_back(accuracy::one_refinement("modes", value, signature(runs.get(n.band), probe, q), 2.0, 2.0));
     components.push_back(accuracy::one_refinement("steps", value, signature(runs.get(n.steps), probe, q), 2.0, 2.0));
@@ -262,37 +187,13 @@ accuracy::Estimate estimate_of(const std::string& quantity, Runs& runs, const Se
   return accuracy::combine(quantity, value, components);
 }
 
-nlohmann::json component_json(const accuracy::Component& component) {
-  nlohmann::json json = {{"delta", component.delta},
-                         {"refined", component.refined},
-                         {"safety_factor", component.safety_factor},
-                         {"verified", component.verified},
-                         {"asymptotic", component.asymptotic}};
-  if (component.ratio != 0.0) {
-    json["levels_ratio"] = component.ratio;
-    json["observed_rate"] = component.observed_order;
-  }
-  if (!component.reason.empty()) json["reason"] = component.reason;
-  return json;
-}
-
-nlohmann::json estimate_json(const accuracy::Estimate& estimate) {
-  nlohmann::json components = nlohmann::json::object();
-  for (const accuracy::Component& component : estimate.components) components[component.name] = component_json(component);
-  return {{"value", estimate.value},   {"error", estimate.sum},         {"rss", estimate.rss},
-          {"verified", estimate.verified}, {"asymptotic", estimate.asymptotic}, {"reasons", estimate.reasons},
-          {"components", components}};
-}
-
 /// Every signature's estimate at a setting, with the largest error among the tolerance's
 /// quantities and the component that contributes most to it.
 struct SettingEstimate {
   nlohmann::json probes = nlohmann::json::object();
   nlohmann::json mode;
   std::vector<std::pair<std::string, accuracy::Estimate>> lines;  ///< for the terminal
-  double worst = 0.0;                                              ///< largest sum among the tolerance's quantities
-  bool verified = true;                                            ///< of those quantities
-  std::map<std::string, double> largest;                           ///< per component, largest |delta| among them
+  SettingSummary summary;                                          ///< of the tolerance's quantities
 };
 
 SettingEstimate estimate_setting(Runs& runs, const Setting& setting, const std::vector<std::string>& quantities) {
@@ -302,13 +203,7 @@ SettingEstimate estimate_setting(Runs& runs, const Setting& setting, const std::
     return std::find(quantities.begin(), quantities.end(), quantity) != quantities.end();
   };
   auto take = [&](const accuracy::Estimate& estimate, bool in_tolerance) {
-    if (!in_tolerance) return;
-    result.worst = std::max(result.worst, estimate.sum);
-    result.verified = result.verified && estimate.verified;
-    for (const accuracy::Component& component : estimate.components) {
-      double& largest = result.largest[component.name];
-      largest = std::max(largest, std::abs(component.delta));
-    }
+    if (in_tolerance) add_to_summary(estimate, result.summary);
   };
   for (std::size_t p = 0; p < run.probes.size(); ++p) {
     nlohmann::json probe_json = nlohmann::json::object();
@@ -338,15 +233,10 @@ SettingEstimate estimate_setting(Runs& runs, const Setting& setting, const std::
 
 /// The next setting the tolerance refines to: the component with the largest error per second of
 /// its refinement run, or empty with `blocking` saying why none can go on.
-std::optional<Setting> refine(Runs& runs, const Setting& setting, const SettingEstimate& estimate, double budget_left,
+std::optional<Setting> refine(Runs& runs, const Setting& setting, const SettingSummary& summary, double budget_left,
                               std::string& blocking) {
   const Neighbours n = neighbours(setting, runs.box_mesh());
-  struct Choice {
-    std::string name;
-    Setting next;
-    double cost;
-  };
-  std::vector<Choice> choices;
+  std::vector<RefinementChoice> choices;
   const double here = runs.get(setting).wall_s;
   if (n.coarse) {
     Setting finer = setting;
@@ -357,48 +247,30 @@ std::optional<Setting> refine(Runs& runs, const Setting& setting, const SettingE
   choices.push_back({"modes", n.band, runs.get(n.band).wall_s});
   choices.push_back({"steps", n.steps, runs.get(n.steps).wall_s});
   if (runs.has_contact()) choices.push_back({"penalty", n.penalty, runs.get(n.penalty).wall_s});
-  const Choice* best = nullptr;
-  double best_rate = -1.0;
-  for (const Choice& choice : choices) {
-    const auto found = estimate.largest.find(choice.name);
-    const double rate = (found == estimate.largest.end() ? 0.0 : found->second) / std::max(1e-3, choice.cost);
-    if (rate > best_rate) best_rate = rate, best = &choice;
-  }
-  if (!best || best_rate <= 0.0) {
-    blocking = "window (the steady-state window change; raise spectrum.steady_state.min_periods or lower its tolerance)";
-    return std::nullopt;
-  }
-  if (best->name == "mesh" && best->next.order > 4) {
-    blocking = "mesh (the highest element order, 4, is reached; finer cells: mesh.box.cells with transient.model: reduced)";
-    return std::nullopt;
-  }
-  if (best->cost > budget_left) {
-    blocking = best->name + " (its refinement run, about " + format_number(std::round(best->cost)) +
-               " s, exceeds what is left of accuracy.budget)";
-    return std::nullopt;
-  }
-  return best->next;
-}
-
-std::string percent(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.2g %%", 100.0 * value);
-  return text;
+  return choose_refinement(choices, summary, budget_left,
+                           "window (the steady-state window change; raise spectrum.steady_state.min_periods or lower "
+                           "its tolerance)",
+                           blocking);
 }
 
 }  // namespace
+
+nlohmann::json route_json(const RunRoute& route) {
+  nlohmann::json json = {{"model", route.model}, {"automatic", route.automatic}, {"reason", route.reason}};
+  if (route.own_mesh) {
+    json["mesh"] = {{"cells", route.cells}, {"order", route.order}, {"grading", "always"}};
+    json["scene_mesh"] = {{"cells", route.scene_cells}, {"order", route.scene_order}};
+  }
+  return json;
+}
 
 void run_with_accuracy(const scene::Scene& scene, const RunRoute& route, const std::vector<scene::Override>& overrides,
                        const RunCommandOptions& options, std::ostream& out) {
   Stopwatch total;
   const fs::path& directory = options.output_directory;
-  nlohmann::json route_json = {{"model", route.model}, {"automatic", route.automatic}, {"reason", route.reason}};
-  if (route.own_mesh) {
-    route_json["mesh"] = {{"cells", route.cells}, {"order", route.order}, {"grading", "always"}};
-    route_json["scene_mesh"] = {{"cells", route.scene_cells}, {"order", route.scene_order}};
-  }
+  const nlohmann::json route_json = pipeline::route_json(route);
   if (route.automatic) out << "route: " << route.reason << "\n";
-  const Plan plan = accuracy_plan(scene, route);
+  const EstimatePlan plan = accuracy_plan(scene, route);
   if (!plan.estimate) {
     const RunOutcome outcome = run_scene(scene, options, out);
     nlohmann::json accuracy = {{"estimated", false}, {"reason", plan.reason}};
@@ -421,74 +293,42 @@ void run_with_accuracy(const scene::Scene& scene, const RunRoute& route, const s
   const RunOutcome& first = runs.get(setting, true);
   const double run_s = first.wall_s;
   if (first.probes.empty()) throw SolverError(scene.file + ": accuracy: the run has no probe signatures to estimate");
-  SettingEstimate estimate = estimate_setting(runs, setting, scene.accuracy.quantities);
-  std::optional<bool> met;
-  std::string blocking;
-  if (plan.tolerance) {
-    while (true) {
-      if (estimate.worst <= *plan.tolerance && estimate.verified) {
-        met = true;
-        break;
-      }
-      met = false;
-      if (!estimate.verified) {
-        blocking = "an estimate that is not verified (see reasons)";
-        break;
-      }
-      const double left = scene.accuracy.budget_s - total.seconds();
-      const std::optional<Setting> next = refine(runs, setting, estimate, left, blocking);
-      if (!next) break;
-      setting = *next;
-      out << "accuracy: largest estimate " << percent(estimate.worst) << " > tolerance " << percent(*plan.tolerance)
-          << ": refining to " << runs.describe(setting) << "\n";
-      estimate = estimate_setting(runs, setting, scene.accuracy.quantities);
-    }
-  }
+  const std::vector<std::string>& quantities = scene.accuracy.quantities;
+  SettingEstimate estimate = estimate_setting(runs, setting, quantities);
+  const ToleranceOutcome outcome = reach_tolerance(
+      plan.tolerance, setting, estimate.summary,
+      [&](const Setting& from, std::string& blocking) {
+        return refine(runs, from, estimate.summary, scene.accuracy.budget_s - total.seconds(), blocking);
+      },
+      [&](const Setting& at) {
+        estimate = estimate_setting(runs, at, quantities);
+        return estimate.summary;
+      },
+      [&](const Setting& at) { return runs.describe(at); }, out);
   const RunOutcome& chosen = runs.get(setting);
   runs.adopt(setting);
   for (const auto& [where, line] : estimate.lines) out << "accuracy " << where << ": " << accuracy::estimate_line(line) << "\n";
   const double wall = total.seconds();
-  nlohmann::json accuracy = {{"estimated", true},
-                             {"method", "one refinement per component from the setting run (DETECTION.md sec. 1): mesh: "
-                                        "the two lower element orders (Richardson with the observed rate per order, "
-                                        "GCI safety factor 1.25, 3 where not asymptotic); modes: twice the band; "
-                                        "steps: twice per period; penalty: four times; window: the change from the "
-                                        "window before. delta: signed relative error of the value, error: sum of "
-                                        "|delta|, rss: root-sum-square"},
-                             {"setting", runs.describe(setting)},
-                             {"tolerance", plan.tolerance ? nlohmann::json(*plan.tolerance) : nlohmann::json(nullptr)},
-                             {"quantities", scene.accuracy.quantities},
-                             {"budget_s", scene.accuracy.budget_s},
-                             {"error", estimate.worst},
-                             {"verified", estimate.verified},
-                             {"probes", estimate.probes},
-                             {"runs", runs.runs_json()},
-                             {"run_s", run_s},
-                             {"estimate_s", runs.refinement_s()},
-                             {"share", wall > 0.0 ? runs.refinement_s() / wall : 0.0}};
-  if (met) accuracy["met"] = *met;
-  if (!blocking.empty()) accuracy["blocking"] = blocking;
+  nlohmann::json accuracy = accuracy_summary(runs.describe(setting), plan.tolerance, quantities, scene.accuracy.budget_s,
+                                             estimate.summary, outcome, runs.runs_json(), run_s, runs.refinement_s(), wall);
+  accuracy["method"] = "one refinement per component from the setting run (DETECTION.md sec. 1): mesh: the two lower "
+                       "element orders (Richardson with the observed rate per order, GCI safety factor 1.25, 3 where "
+                       "not asymptotic); modes: twice the band; steps: twice per period; penalty: four times; window: "
+                       "the change from the window before. delta: signed relative error of the value, error: sum of "
+                       "|delta|, rss: root-sum-square";
+  accuracy["probes"] = estimate.probes;
   if (!estimate.mode.is_null()) accuracy["mode"] = estimate.mode;
   on_writer_rank([&] {
     nlohmann::json spectrum = *chosen.spectrum;
     spectrum["accuracy"] = accuracy;
     io::write_json(directory / "spectrum.json", spectrum);
-    nlohmann::json summary = {{"estimated", true}, {"setting", runs.describe(setting)}, {"error", estimate.worst},
-                              {"verified", estimate.verified}, {"run_s", run_s}, {"estimate_s", runs.refinement_s()},
-                              {"share", accuracy["share"]}};
-    if (met) summary["met"] = *met;
-    if (!blocking.empty()) summary["blocking"] = blocking;
+    // run.json: the summary alone
+    nlohmann::json summary = accuracy;
+    for (const char* detail : {"method", "probes", "mode", "runs", "quantities", "budget_s", "tolerance"}) summary.erase(detail);
     write_run_json(scene, directory, chosen, route_json, summary, wall);
   });
-  if (plan.tolerance) {
-    out << "accuracy: tolerance " << percent(*plan.tolerance) << (*met ? " met" : " not met") << " (largest estimate "
-        << percent(estimate.worst) << " on " << nlohmann::json(scene.accuracy.quantities).dump() << ")";
-    if (!blocking.empty()) out << ", blocked by " << blocking;
-    out << "\n";
-  }
-  out << "accuracy: " << runs.runs_json().size() - 1 << " refinement runs, " << std::setprecision(3)
-      << runs.refinement_s() << " s (" << std::setprecision(2) << 100.0 * runs.refinement_s() / wall
-      << " % of the " << std::setprecision(3) << wall << " s)\n";
+  print_accuracy_end(out, plan.tolerance, outcome, estimate.summary, quantities, runs.runs_json().size() - 1, "runs",
+                     runs.refinement_s(), wall);
   out << "wrote " << (directory / "run.json").string() << "\n";
 }
 

@@ -6,13 +6,19 @@
 /// tolerance, the component with the largest error per unit cost is refined until the estimate meets
 /// it or the budget is spent. The numbers are combined by accuracy/estimate.hpp; this file wires.
 #include <iosfwd>
+#include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "pipeline/commands.hpp"
 #include "pipeline/route.hpp"
 #include "scene/scene.hpp"
 
 namespace crackle::pipeline {
+
+/// run.json and sweep.json `route`: model, automatic, reason, and the own mesh beside the scene's.
+nlohmann::json route_json(const RunRoute& route);
 
 /// Runs `scene` (the user's scene with `overrides`, the route's included) into
 /// options.output_directory, estimates its signatures when the scene asks for it, and writes

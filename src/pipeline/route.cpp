@@ -70,6 +70,28 @@ int route_order(const scene::Scene& scene, const std::array<int, 3>& cells) {
   return order;
 }
 
+/// The automatic route's mesh: on a box, its own cells and order graded towards the crack front
+/// (overrides and reason appended); a Gmsh mesh stays as it is.
+void take_own_mesh(const scene::Scene& scene, RunRoute& route) {
+  if (!scene.gmsh_file.empty()) {
+    route.reason += " on the scene's Gmsh mesh";
+    return;
+  }
+  route.own_mesh = true;
+  route.cells = route_cells(scene);
+  route.order = route_order(scene, route.cells);
+  const std::string cells = route.cells == route.scene_cells
+                                ? "the scene's cells " + cells_text(route.cells)
+                                : "the scene's cells " + cells_text(route.scene_cells) + " coarsened to " +
+                                      cells_text(route.cells) + " (about the thinnest side)";
+  route.reason += ", on its own mesh: " + cells + ", order " + std::to_string(route.order) +
+                  ", graded towards the crack front (the signature converges with the front resolved, "
+                  "docs/benchmarks.md section 5.1)";
+  route.overrides.push_back({"mesh.box.cells", cells_text(route.cells)});
+  route.overrides.push_back({"mesh.box.order", std::to_string(route.order)});
+  route.overrides.push_back({"mesh.box.grading", grading_always(scene)});
+}
+
 }  // namespace
 
 std::array<int, 3> route_cells(const scene::Scene& scene) {
@@ -121,23 +143,27 @@ RunRoute choose_route(const scene::Scene& scene, int ranks) {
   route.overrides.push_back({"transient.model", "reduced"});
   route.reason = "transient.model: auto took the reduced model for a harmonic-drive signature run (a breathing crack, "
                  "a spectrum, one process, no explicit time step or initial fields)";
-  if (!scene.gmsh_file.empty()) {
-    route.reason += " on the scene's Gmsh mesh";
+  take_own_mesh(scene, route);
+  return route;
+}
+
+RunRoute choose_sweep_route(const scene::Scene& scene) {
+  RunRoute route;
+  route.model = "reduced";
+  route.scene_cells = route.cells = scene.box.cells;
+  route.scene_order = route.order = scene.box.order;
+  const std::string model = scene.transient ? scene.transient->model : std::string("auto");
+  if (model != "auto") {
+    route.reason = "transient.model: " + model + ": the sweep's reduced model on the scene's mesh as written";
     return route;
   }
-  route.own_mesh = true;
-  route.cells = route_cells(scene);
-  route.order = route_order(scene, route.cells);
-  const std::string cells = route.cells == route.scene_cells
-                                ? "the scene's cells " + cells_text(route.cells)
-                                : "the scene's cells " + cells_text(route.scene_cells) + " coarsened to " +
-                                      cells_text(route.cells) + " (about the thinnest side)";
-  route.reason += ", on its own mesh: " + cells + ", order " + std::to_string(route.order) +
-                  ", graded towards the crack front (the signature converges with the front resolved, "
-                  "docs/benchmarks.md section 5.1)";
-  route.overrides.push_back({"mesh.box.cells", cells_text(route.cells)});
-  route.overrides.push_back({"mesh.box.order", std::to_string(route.order)});
-  route.overrides.push_back({"mesh.box.grading", grading_always(scene)});
+  route.automatic = true;
+  route.reason = "transient.model: auto: the sweep's reduced model";
+  if (!scene.has_crack() || scene.contact.model != "penalty") {
+    route.reason += " on the scene's mesh (no breathing crack whose front needs the graded mesh)";
+    return route;
+  }
+  take_own_mesh(scene, route);
   return route;
 }
 

@@ -36,6 +36,11 @@ struct RunRoute {
 /// The route of a scene for `crackle run` on `ranks` processes.
 RunRoute choose_route(const scene::Scene& scene, int ranks);
 
+/// The mesh of `crackle sweep` (always the reduced model): with transient.model: auto and a
+/// breathing crack in a box, the automatic route's own graded mesh (as choose_route takes it);
+/// otherwise the scene's mesh as written. `overrides` hold only the mesh keys.
+RunRoute choose_sweep_route(const scene::Scene& scene);
+
 /// The box cells of the automatic route: the scene's cells coarsened along each axis to about the
 /// body's thinnest side (never finer than the scene's), keeping every crack-plane position a grid
 /// plane; a cell count that cannot keep it stays the scene's.

@@ -174,14 +174,26 @@ double amplitude_of(const SweepPoint& point, const SweepProbe& probe, int k, int
 }
 
 /// The frequency and value of the largest `value(point)`, refined by a parabola through the three
-/// points around it (on a monotonic stretch of the branch).
-nlohmann::json peak(const SweepResult& result, const std::function<double(const SweepPoint&)>& value) {
+/// points around it (on a monotonic stretch of the branch). A largest value at the first or last
+/// point of a branch that stepped past the end of the range is taken at that end (linear between the
+/// two points around it; `at_end`), so that it does not depend on how far the last step overshot.
+nlohmann::json peak(const SweepResult& result, const SweepSettings& settings,
+                    const std::function<double(const SweepPoint&)>& value) {
   const auto& points = result.points;
   if (points.empty()) return nullptr;
   std::size_t best = 0;
   for (std::size_t i = 1; i < points.size(); ++i)
     if (value(points[i]) > value(points[best])) best = i;
   double f = points[best].frequency_hz(), y = value(points[best]);
+  if (points.size() >= 2 && (best == 0 || best + 1 == points.size())) {
+    const std::size_t inner = best == 0 ? 1 : best - 1;
+    const double end = best == 0 ? settings.from_hz : settings.to_hz;
+    const double fi = points[inner].frequency_hz();
+    if ((f - end) * (fi - end) < 0.0) {  // the end lies between the last two points
+      y = value(points[inner]) + (y - value(points[inner])) * (end - fi) / (f - fi);
+      return {{"frequency_hz", end}, {"value", y}, {"point", best}, {"at_end", true}};
+    }
+  }
   if (best > 0 && best + 1 < points.size()) {
     const double x0 = points[best - 1].frequency_hz(), x1 = f, x2 = points[best + 1].frequency_hz();
     const double y0 = value(points[best - 1]), y1 = y, y2 = value(points[best + 1]);
@@ -460,10 +472,10 @@ nlohmann::json sweep_json(const SweepResult& result, const SweepSettings& settin
       };
     };
     probes[probe.name] = {{"component", axis_name(probe.component)}, {"unit", "m"},
-                          {"peak_a1", peak(result, [&](const SweepPoint& p) { return p.solution.amplitude(probe.row, 1.0); })},
-                          {"peak_a2_over_a1", peak(result, ratio(2.0))},
-                          {"peak_a3_over_a1", peak(result, ratio(3.0))}};
-    if (section.subharmonic == 2) probes[probe.name]["peak_a_half_over_a1"] = peak(result, ratio(0.5));
+                          {"peak_a1", peak(result, settings, [&](const SweepPoint& p) { return p.solution.amplitude(probe.row, 1.0); })},
+                          {"peak_a2_over_a1", peak(result, settings, ratio(2.0))},
+                          {"peak_a3_over_a1", peak(result, settings, ratio(3.0))}};
+    if (section.subharmonic == 2) probes[probe.name]["peak_a_half_over_a1"] = peak(result, settings, ratio(0.5));
   }
   document["probes"] = probes;
   return document;

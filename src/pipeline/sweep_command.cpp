@@ -14,6 +14,7 @@
 #include "pipeline/reduced_model.hpp"
 #include "pipeline/stages.hpp"
 #include "pipeline/sweep.hpp"
+#include "pipeline/sweep_accuracy.hpp"
 
 namespace crackle::pipeline {
 namespace {
@@ -53,10 +54,10 @@ SweepProgress progress_line(std::ostream& progress, bool enabled) {
   };
 }
 
+/// sweep.csv and the plots (sweep.json is written by the caller, with the route and accuracy).
 void write_outputs(const fs::path& directory, const SweepResult& result, const SweepSettings& settings,
-                   nlohmann::json document, std::ostream& out) {
+                   std::ostream& out) {
   io::write_csv(directory / "sweep.csv", sweep_table(result, settings));
-  io::write_json(directory / "sweep.json", document);
   if (!settings.section.plots) return;
   for (std::size_t p = 0; p < settings.probes.size(); ++p) {
     spectral::PlotOptions plot;
@@ -85,12 +86,9 @@ void print_summary(const SweepResult& result, const nlohmann::json& document, st
 /// Pair rows above which a harmonic-balance sweep runs without stability (see run_sweep_command).
 constexpr Index kStabilityRowLimit = 1000;
 
-void run_sweep_command(const SweepCommandOptions& options, std::ostream& out, std::ostream& progress) {
+SweepOutcome sweep_scene(const scene::Scene& scene, const SweepCommandOptions& options, std::ostream& out,
+                         std::ostream& progress) {
   Stopwatch total;
-  const scene::Scene scene = scene::load_scene(options.scene_path, parse_overrides(options.overrides));
-  if (!scene.sweep) {
-    throw InputError(scene.file + ": sweep: expected a sweep section for crackle sweep (frequency: {from, to}), got none");
-  }
   const fs::path& directory = options.output_directory;
   // The modal stage (mode-relative ranges) and the reduction's static solves hold K, M and copies.
   check_memory(scene, matrices::eigen_solve);
@@ -141,10 +139,24 @@ void run_sweep_command(const SweepCommandOptions& options, std::ostream& out, st
   document["model"] = {{"modes", reduced.modes}, {"pairs", reduced.pairs}, {"pair_rows", reduced.system.n_rows()},
                        {"unknowns", unknowns}, {"max_frequency_hz", reduced.max_frequency_hz}};
   document["seconds_per_point"] = result.points.empty() ? 0.0 : result.solve_s / double(result.points.size());
-  document["wall_s"] = total.seconds();
-  write_outputs(directory, result, settings, document, out);
+  write_outputs(directory, result, settings, out);
   print_summary(result, document, out);
-  out << "wrote " << (directory / "sweep.json").string() << "\n";
+  document["wall_s"] = total.seconds();
+  return {std::move(document), total.seconds()};
+}
+
+void run_sweep_command(const SweepCommandOptions& options, std::ostream& out, std::ostream& progress) {
+  std::vector<scene::Override> overrides = parse_overrides(options.overrides);
+  const scene::Scene written = scene::load_scene(options.scene_path, overrides);
+  if (!written.sweep) {
+    throw InputError(written.file + ": sweep: expected a sweep section for crackle sweep (frequency: {from, to}), got none");
+  }
+  // transient.model: auto gives the sweep's reduced model the automatic route's own mesh, by
+  // overrides after the user's, so every later check and message sees the scene that runs.
+  const RunRoute route = choose_sweep_route(written);
+  overrides.insert(overrides.end(), route.overrides.begin(), route.overrides.end());
+  const scene::Scene scene = route.overrides.empty() ? written : scene::load_scene(options.scene_path, overrides);
+  sweep_with_accuracy(scene, route, overrides, options, out, progress);
 }
 
 }  // namespace crackle::pipeline

@@ -355,9 +355,14 @@ Param build_parameters() {
                        "numerical error estimated by one refinement at a time from the setting that was run (mesh: "
                        "three element orders on the same graded grid, Richardson with the observed rate; modes: "
                        "twice the retained band; time step: twice the steps; penalty: four times it; the "
-                       "steady-state window change), reported in spectrum.json accuracy and on the terminal.", {
-      choice("estimate", "auto: on for the reduced model (its refinements cost a fraction of the run), off for "
-                         "the full model (they would cost more than the run); on; off.", {"auto", "on", "off"})
+                       "steady-state window change), reported in spectrum.json accuracy and on the terminal. crackle sweep "
+                       "estimates each probe's peaks, the fold and period-doubling frequencies and the bilinear "
+                       "frequency (mesh: the two lower orders; modes: twice the band; harmonics: H + 2) in sweep.json "
+                       "accuracy.", {
+      choice("estimate", "auto: crackle run: on for the reduced model (its refinements cost a fraction of the run), "
+                         "off for the full model (they would cost more than the run); crackle sweep: on with "
+                         "transient.model: auto (the route's own mesh), off for a mesh swept as written; on; off.",
+             {"auto", "on", "off"})
           .defaults_to("auto"),
       number("tolerance", "Relative error to reach on accuracy.quantities at every probe: the run refines the "
                           "component with the largest error per unit cost until the estimate (sum of the "
@@ -929,7 +934,9 @@ Scene scene_from(const Values& values) {
   if (values.has("spectrum")) scene.spectrum = spectrum_from(values, scene);
   if (values.has("sweep")) scene.sweep = sweep_from(values, scene);
   if (values.has("accuracy")) {
-    if (!scene.spectrum) values.fail("accuracy", "a spectrum: section (the accuracy estimates are of its signatures)", "none");
+    if (!scene.spectrum && !scene.sweep) {
+      values.fail("accuracy", "a spectrum: or sweep: section (the accuracy estimates are of their signatures)", "none");
+    }
     scene.accuracy.estimate = values.word("accuracy.estimate");
     scene.accuracy.tolerance = optional_number(values, "accuracy.tolerance");
     scene.accuracy.budget_s = values.number("accuracy.budget");

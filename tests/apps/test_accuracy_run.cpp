@@ -187,7 +187,7 @@ TEST(Accuracy, BadAccuracyInputIsAClearError) {
   no_spectrum = no_spectrum.substr(0, no_spectrum.find("spectrum:")) + "accuracy: {tolerance: 0.01}\n";
   const cli_testing::Result missing = run_scene_text("no-spectrum", no_spectrum);
   EXPECT_EQ(missing.exit_code, 2) << missing.output;
-  EXPECT_NE(missing.output.find("accuracy: expected a spectrum: section"), std::string::npos) << missing.output;
+  EXPECT_NE(missing.output.find("accuracy: expected a spectrum: or sweep: section"), std::string::npos) << missing.output;
 
   const cli_testing::Result bad_tolerance =
       run_scene_text("bad-tolerance", forced("auto", "") + "accuracy: {tolerance: 2}\n");

@@ -231,6 +231,7 @@ TEST(SweepCommand, ACrackOutboardOfTheDriveIsSweptInAboutTheRequestedPoints) {
   std::string text = cli_testing::cantilever("[10, 1, 2]");
   text.replace(text.find("at: 0.04"), 8, "at: 0.16");
   text += R"(transient:
+  model: reduced
   excitation: {point: [0.1, 0.01, 0.01], direction: z, amplitude: 20.0, frequency: {mode: 1, ratio: 0.5}}
   damping: {ratio: 0.05, at: {mode: 1}}
   periods: 60

@@ -1,0 +1,220 @@
+#include "pipeline/refinement.hpp"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <iomanip>
+#include <ostream>
+
+#include "core/errors.hpp"
+
+namespace crackle::pipeline {
+
+namespace fs = std::filesystem;
+
+std::string Setting::key() const {
+  return "p" + std::to_string(order) + "-b" + std::to_string(band) + "-s" + std::to_string(steps) + "-k" +
+         std::to_string(penalty) + "-h" + std::to_string(harmonics);
+}
+
+Neighbours neighbours(const Setting& setting, bool box_mesh) {
+  Neighbours n;
+  if (box_mesh && setting.order >= 3) {
+    n.coarse = setting;
+    n.coarse->order -= 1;
+    n.coarser = setting;
+    n.coarser->order -= 2;
+  }
+  n.band = n.steps = n.penalty = n.harmonics = setting;
+  n.band.band += 1;
+  n.steps.steps += 1;
+  n.penalty.penalty += 1;
+  n.harmonics.harmonics += 1;
+  return n;
+}
+
+std::vector<scene::Override> order_and_band_overrides(const scene::Scene& scene, const Setting& setting,
+                                                      double base_max_frequency_hz) {
+  std::vector<scene::Override> levels;
+  if (scene.gmsh_file.empty()) levels.push_back({"mesh.box.order", std::to_string(setting.order)});
+  if (setting.band) {
+    const int modes = scene.transient->reduced.modes;
+    if (modes > 0) levels.push_back({"transient.reduced.modes", std::to_string(modes << setting.band)});
+    else levels.push_back({"transient.reduced.max_frequency", format_number(base_max_frequency_hz * (1 << setting.band))});
+  }
+  return levels;
+}
+
+accuracy::Component missing_component(const std::string& name, double value) {
+  accuracy::Component component;
+  component.name = name;
+  component.value = component.refined = value;
+  component.verified = component.asymptotic = false;
+  component.reason = name + ": the refinement lacks this quantity (a peak or event that moved out of the range "
+                            "or changed its kind)";
+  return component;
+}
+
+accuracy::Component mesh_component(double value, bool levels, double q1, double q2, bool box_mesh) {
+  if (levels) {
+    if (std::isfinite(q1) && std::isfinite(q2)) {
+      return accuracy::three_level("mesh", q1, q2, value, kOrderLevelRatio, kRateMin, kRateMax);
+    }
+    return missing_component("mesh", value);
+  }
+  accuracy::Component mesh = missing_component("mesh", value);
+  mesh.reason = box_mesh ? "not estimated below element order 3 (the levels are the two lower orders)"
+                         : "not estimated on a Gmsh mesh (no refinement family)";
+  return mesh;
+}
+
+RefinementFolders::RefinementFolders(const fs::path& output_directory, const fs::path& modal_cache)
+    : output_(output_directory), scratch_(output_directory / ("accuracy.tmp." + std::to_string(::getpid()))) {
+  cache_ = modal_cache.empty() ? scratch_ / "cache" : modal_cache;
+}
+
+RefinementFolders::~RefinementFolders() {
+  std::error_code ignored;
+  fs::remove_all(scratch_, ignored);
+}
+
+fs::path RefinementFolders::folder(const Setting& setting, bool first) {
+  const fs::path folder = first ? output_ : scratch_ / setting.key();
+  if (!first) fs::create_directories(folder);
+  folders_[setting.key()] = folder;
+  return folder;
+}
+
+void RefinementFolders::adopt(const Setting& setting) const {
+  const fs::path from = folders_.at(setting.key());
+  if (from == output_) return;
+  for (const fs::directory_entry& entry : fs::directory_iterator(from)) {
+    if (!entry.is_regular_file()) continue;
+    fs::rename(entry.path(), output_ / entry.path().filename());
+  }
+}
+
+void add_to_summary(const accuracy::Estimate& estimate, SettingSummary& summary) {
+  summary.worst = std::max(summary.worst, estimate.sum);
+  summary.verified = summary.verified && estimate.verified;
+  for (const accuracy::Component& component : estimate.components) {
+    double& largest = summary.largest[component.name];
+    largest = std::max(largest, std::abs(component.delta));
+  }
+}
+
+std::optional<Setting> choose_refinement(const std::vector<RefinementChoice>& choices, const SettingSummary& summary,
+                                         double budget_left, const std::string& nothing_left, std::string& blocking) {
+  const RefinementChoice* best = nullptr;
+  double best_rate = -1.0;
+  for (const RefinementChoice& choice : choices) {
+    const auto found = summary.largest.find(choice.name);
+    const double rate = (found == summary.largest.end() ? 0.0 : found->second) / std::max(1e-3, choice.cost);
+    if (rate > best_rate) best_rate = rate, best = &choice;
+  }
+  if (!best || best_rate <= 0.0) {
+    blocking = nothing_left;
+    return std::nullopt;
+  }
+  if (best->name == "mesh" && best->next.order > kHighestOrder) {
+    blocking = "mesh (the highest element order, " + std::to_string(kHighestOrder) +
+               ", is reached; finer cells: mesh.box.cells with transient.model: reduced)";
+    return std::nullopt;
+  }
+  if (best->cost > budget_left) {
+    blocking = best->name + " (its refinement run, about " + format_number(std::round(best->cost)) +
+               " s, exceeds what is left of accuracy.budget)";
+    return std::nullopt;
+  }
+  return best->next;
+}
+
+ToleranceOutcome reach_tolerance(std::optional<double> tolerance, Setting& setting, SettingSummary& summary,
+                                 const std::function<std::optional<Setting>(const Setting&, std::string&)>& refine,
+                                 const std::function<SettingSummary(const Setting&)>& summarize,
+                                 const std::function<std::string(const Setting&)>& describe, std::ostream& out) {
+  ToleranceOutcome outcome;
+  if (!tolerance) return outcome;
+  while (true) {
+    if (summary.worst <= *tolerance && summary.verified) {
+      outcome.met = true;
+      return outcome;
+    }
+    outcome.met = false;
+    if (!summary.verified) {
+      outcome.blocking = "an estimate that is not verified (see reasons)";
+      return outcome;
+    }
+    const std::optional<Setting> next = refine(setting, outcome.blocking);
+    if (!next) return outcome;
+    out << "accuracy: largest estimate " << percent(summary.worst) << " > tolerance " << percent(*tolerance)
+        << ": refining to " << describe(*next) << "\n";
+    setting = *next;
+    summary = summarize(setting);
+  }
+}
+
+nlohmann::json accuracy_summary(const std::string& setting, std::optional<double> tolerance,
+                                const std::vector<std::string>& quantities, double budget_s,
+                                const SettingSummary& summary, const ToleranceOutcome& outcome,
+                                const nlohmann::json& runs, double run_s, double estimate_s, double wall_s) {
+  nlohmann::json json = {{"estimated", true},
+                         {"setting", setting},
+                         {"tolerance", tolerance ? nlohmann::json(*tolerance) : nlohmann::json(nullptr)},
+                         {"quantities", quantities},
+                         {"budget_s", budget_s},
+                         {"error", summary.worst},
+                         {"verified", summary.verified},
+                         {"runs", runs},
+                         {"run_s", run_s},
+                         {"estimate_s", estimate_s},
+                         {"share", wall_s > 0.0 ? estimate_s / wall_s : 0.0}};
+  if (outcome.met) json["met"] = *outcome.met;
+  if (!outcome.blocking.empty()) json["blocking"] = outcome.blocking;
+  return json;
+}
+
+void print_accuracy_end(std::ostream& out, std::optional<double> tolerance, const ToleranceOutcome& outcome,
+                        const SettingSummary& summary, const std::vector<std::string>& quantities, std::size_t runs,
+                        const std::string& noun, double estimate_s, double wall_s) {
+  if (tolerance) {
+    out << "accuracy: tolerance " << percent(*tolerance) << (*outcome.met ? " met" : " not met")
+        << " (largest estimate " << percent(summary.worst) << " on " << nlohmann::json(quantities).dump() << ")";
+    if (!outcome.blocking.empty()) out << ", blocked by " << outcome.blocking;
+    out << "\n";
+  }
+  out << "accuracy: " << runs << " refinement " << noun << ", " << std::setprecision(3) << estimate_s << " s ("
+      << std::setprecision(2) << 100.0 * estimate_s / wall_s << " % of the " << std::setprecision(3) << wall_s
+      << " s)\n";
+}
+
+std::string percent(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2g %%", 100.0 * value);
+  return text;
+}
+
+nlohmann::json component_json(const accuracy::Component& component) {
+  nlohmann::json json = {{"delta", component.delta},
+                         {"refined", component.refined},
+                         {"safety_factor", component.safety_factor},
+                         {"verified", component.verified},
+                         {"asymptotic", component.asymptotic}};
+  if (component.ratio != 0.0) {
+    json["levels_ratio"] = component.ratio;
+    json["observed_rate"] = component.observed_order;
+  }
+  if (!component.reason.empty()) json["reason"] = component.reason;
+  return json;
+}
+
+nlohmann::json estimate_json(const accuracy::Estimate& estimate) {
+  nlohmann::json components = nlohmann::json::object();
+  for (const accuracy::Component& component : estimate.components) components[component.name] = component_json(component);
+  return {{"value", estimate.value},   {"error", estimate.sum},         {"rss", estimate.rss},
+          {"verified", estimate.verified}, {"asymptotic", estimate.asymptotic}, {"reasons", estimate.reasons},
+          {"components", components}};
+}
+
+}  // namespace crackle::pipeline

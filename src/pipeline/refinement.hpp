@@ -1,0 +1,148 @@
+#pragma once
+/// \file What `crackle run` and `crackle sweep` share in estimating their results (DETECTION.md
+/// sec. 1): the settings of the numerical parameters and their refinements, the temporary folders
+/// the refinement runs write into, the mesh component from the two lower element orders, and the
+/// tolerance loop that refines the component with the largest error per second. The numbers are
+/// combined by accuracy/estimate.hpp; which runs make a quantity is the caller's.
+#include <filesystem>
+#include <functional>
+#include <iosfwd>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "accuracy/estimate.hpp"
+#include "scene/scene.hpp"
+
+namespace crackle::pipeline {
+
+/// Rate of the mesh levels: the element order is raised by one per level, so the observed "order"
+/// is the rate ln((Q1 - Q2)/(Q2 - Q3)) per order; sane when the error at least halves per order
+/// (rate ln 2 up to 20).
+inline constexpr double kOrderLevelRatio = 2.718281828459045;
+inline constexpr double kRateMin = 0.6931471805599453, kRateMax = 20.0;
+/// The highest element order (the box mesher's).
+inline constexpr int kHighestOrder = 4;
+
+/// One setting of the numerical parameters: the element order, and how many times each other
+/// component was refined: the reduced model's band (x2 each), the steps per period (x2), the
+/// penalty (x4), the harmonics of a harmonic balance (+2).
+struct Setting {
+  int order = 0;
+  int band = 0, steps = 0, penalty = 0, harmonics = 0;
+  std::string key() const;
+};
+
+/// The settings the components of an estimate at a setting need: the two lower orders (the mesh,
+/// on a box at order 3 or more) and one refinement of each other component.
+struct Neighbours {
+  std::optional<Setting> coarse, coarser;
+  Setting band, steps, penalty, harmonics;
+};
+Neighbours neighbours(const Setting& setting, bool box_mesh);
+
+/// The overrides of a setting's element order (on a box) and band (transient.reduced.modes, or
+/// max_frequency from the scene's own run's `base_max_frequency_hz`), doubled per band level.
+std::vector<scene::Override> order_and_band_overrides(const scene::Scene& scene, const Setting& setting,
+                                                      double base_max_frequency_hz);
+
+/// The mesh component of a quantity `value` from its values q1, q2 at the two lower orders
+/// (Richardson with the observed rate); where there are no levels (`levels` false) or a level lacks
+/// the quantity (NaN), a component that is not verified, with the reason.
+accuracy::Component mesh_component(double value, bool levels, double q1, double q2, bool box_mesh);
+
+/// A component whose refinement lacks the quantity (NaN there): not verified, with the reason.
+accuracy::Component missing_component(const std::string& name, double value);
+
+/// Whether and how a command's results are estimated.
+struct EstimatePlan {
+  bool estimate = false;
+  std::string reason;  ///< why not
+  std::optional<double> tolerance;
+};
+
+/// The folders of a command's refinement runs: DIR/accuracy.tmp.PID/<setting>, removed with this
+/// object (also when the command fails), and the modal cache they share (the user's, or one in there).
+class RefinementFolders {
+ public:
+  RefinementFolders(const std::filesystem::path& output_directory, const std::filesystem::path& modal_cache);
+  ~RefinementFolders();
+  RefinementFolders(const RefinementFolders&) = delete;
+  RefinementFolders& operator=(const RefinementFolders&) = delete;
+
+  const std::filesystem::path& cache() const { return cache_; }
+  /// The folder of a setting's run: the output folder for the first (the scene's own), else a new
+  /// temporary one.
+  std::filesystem::path folder(const Setting& setting, bool first);
+  /// Moves the files of a setting's run into the output folder (the setting a tolerance settled on).
+  void adopt(const Setting& setting) const;
+
+ private:
+  std::filesystem::path output_, scratch_, cache_;
+  std::map<std::string, std::filesystem::path> folders_;
+};
+
+/// The estimate of every quantity at one setting, as the tolerance loop reads it.
+struct SettingSummary {
+  double worst = 0.0;                      ///< largest error (sum) among the tolerance's quantities
+  bool verified = true;                    ///< of those quantities
+  std::map<std::string, double> largest;   ///< per component, the largest |delta| among them
+};
+
+/// Adds one quantity's estimate to a summary.
+void add_to_summary(const accuracy::Estimate& estimate, SettingSummary& summary);
+
+/// A refinement the tolerance loop may take: the component, the setting that refines it and the
+/// cost of its run [s].
+struct RefinementChoice {
+  std::string name;
+  Setting next;
+  double cost = 0.0;
+};
+
+/// The choice with the largest error per second of its run, or empty with `blocking` saying why
+/// none can go on: no component with an error (`nothing_left`), the highest order reached, or a run
+/// that would exceed what is left of the budget.
+std::optional<Setting> choose_refinement(const std::vector<RefinementChoice>& choices, const SettingSummary& summary,
+                                         double budget_left, const std::string& nothing_left, std::string& blocking);
+
+/// How a tolerance loop ended.
+struct ToleranceOutcome {
+  std::optional<bool> met;  ///< empty: no tolerance
+  std::string blocking;
+};
+
+/// The tolerance loop: from `setting` (its summary given), refines while the estimate is above the
+/// tolerance and verified, each step by `refine` (empty: blocked, with the reason); `summarize`
+/// estimates a setting. `setting` and `summary` end at the setting reported.
+ToleranceOutcome reach_tolerance(std::optional<double> tolerance, Setting& setting, SettingSummary& summary,
+                                 const std::function<std::optional<Setting>(const Setting&, std::string&)>& refine,
+                                 const std::function<SettingSummary(const Setting&)>& summarize,
+                                 const std::function<std::string(const Setting&)>& describe, std::ostream& out);
+
+/// The accuracy block's summary fields (estimated, setting, tolerance, quantities, budget, error,
+/// verified, met, blocking, runs, times and the estimate's share of the wall time).
+nlohmann::json accuracy_summary(const std::string& setting, std::optional<double> tolerance,
+                                const std::vector<std::string>& quantities, double budget_s,
+                                const SettingSummary& summary, const ToleranceOutcome& outcome,
+                                const nlohmann::json& runs, double run_s, double estimate_s, double wall_s);
+
+/// The closing lines: the tolerance met or not (and what blocks), and the refinement runs' cost
+/// (`noun`: "runs" or "sweeps").
+void print_accuracy_end(std::ostream& out, std::optional<double> tolerance, const ToleranceOutcome& outcome,
+                        const SettingSummary& summary, const std::vector<std::string>& quantities, std::size_t runs,
+                        const std::string& noun, double estimate_s, double wall_s);
+
+/// A relative error as text: "0.23 %".
+std::string percent(double value);
+
+/// The JSON of one component and of one quantity's estimate (spectrum.json and sweep.json
+/// `accuracy`): delta, refined, safety factor, verified, asymptotic, levels ratio and rate, reason;
+/// value, error (sum), rss, verified, asymptotic, reasons and the components by name.
+nlohmann::json component_json(const accuracy::Component& component);
+nlohmann::json estimate_json(const accuracy::Estimate& estimate);
+
+}  // namespace crackle::pipeline

@@ -1,0 +1,328 @@
+#include "pipeline/sweep_accuracy.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <optional>
+
+#include "accuracy/estimate.hpp"
+#include "core/errors.hpp"
+#include "core/resources.hpp"
+#include "io/files.hpp"
+#include "pipeline/accuracy.hpp"
+#include "pipeline/distributed_run.hpp"
+#include "pipeline/refinement.hpp"
+
+namespace crackle::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Harmonics added per level of the harmonics refinement (H against H + 2, HYBRID.md sec. 4).
+constexpr int kHarmonicsStep = 2;
+/// The harmonic-balance truncation error is taken as the change from H to H + 2, three times (an
+/// order unknown, Fs = 3): on data/beam.yaml's route the peak A2/A1 at H = 15, 17, 21, 31 is
+/// 0.154913, 0.154993, 0.154952, 0.154881, not monotone, so no rate can be fitted to it
+/// (docs/benchmarks.md section 11.5).
+constexpr double kHarmonicsOrder = 0.0;
+
+EstimatePlan sweep_plan(const scene::Scene& scene, const RunRoute& route) {
+  EstimatePlan plan;
+  const scene::AccuracySection& accuracy = scene.accuracy;
+  if (accuracy.estimate == "off") {
+    plan.reason = "accuracy.estimate: off";
+    return plan;
+  }
+  if (accuracy.estimate == "auto" && !route.automatic && !accuracy.tolerance) {
+    plan.reason = "the sweep of the scene's mesh as written (" + route.reason.substr(0, route.reason.find(':')) +
+                  " not auto): accuracy.estimate: on or an accuracy.tolerance estimates it";
+    return plan;
+  }
+  plan.estimate = true;
+  plan.tolerance = accuracy.tolerance;
+  if (!plan.tolerance && route.automatic) plan.tolerance = 0.01;
+  return plan;
+}
+
+/// A JSON pointer token (RFC 6901): '~' and '/' escaped.
+std::string token(const std::string& text) {
+  std::string escaped;
+  for (char c : text) escaped += c == '~' ? "~0" : c == '/' ? "~1" : std::string(1, c);
+  return escaped;
+}
+
+/// The peaks of sweep.json `probes` that are estimated, with the quantity each one's value is.
+const std::vector<std::pair<std::string, std::string>>& peak_keys() {
+  static const std::vector<std::pair<std::string, std::string>> keys = {
+      {"peak_a1", "A1"}, {"peak_a2_over_a1", "A2/A1"}, {"peak_a3_over_a1", "A3/A1"}, {"peak_a_half_over_a1", "A1/2/A1"}};
+  return keys;
+}
+
+/// One estimated number of the sweep's summary: where it sits in sweep.json (a JSON pointer, the
+/// same in sweep.json `accuracy`), a label for the terminal, and the tolerance quantity it is the
+/// value of ("" for the frequencies of peaks and events).
+struct Quantity {
+  std::string pointer;
+  std::string label;
+  std::string tolerance_quantity;
+  bool modal = false;  ///< a result of the modal stage alone (only the mesh refines it)
+};
+
+/// The estimated numbers of a sweep: each probe's peaks (value and frequency), the bilinear
+/// frequency, and the frequency of each fold and period doubling (by kind and order along the branch).
+std::vector<Quantity> quantities_of(const nlohmann::json& document) {
+  std::vector<Quantity> quantities;
+  for (const auto& [name, probe] : document.at("probes").items()) {
+    for (const auto& [key, quantity] : peak_keys()) {
+      if (!probe.contains(key) || probe[key].is_null()) continue;
+      const std::string at = "/probes/" + token(name) + "/" + key;
+      quantities.push_back({at + "/value", name + " peak " + quantity, quantity});
+      quantities.push_back({at + "/frequency_hz", name + " peak " + quantity + " at [Hz]", ""});
+    }
+  }
+  if (document.contains("bilinear_hz") && !document["bilinear_hz"].is_null()) {
+    quantities.push_back({"/bilinear_hz", "f_b [Hz]", "f_b", true});
+  }
+  std::map<std::string, int> seen;
+  for (const nlohmann::json& event : document.at("events")) {
+    const std::string kind = event.at("kind");
+    if (kind != "fold" && kind != "period_doubling") continue;
+    const std::string name = kind + " " + std::to_string(++seen[kind]);
+    quantities.push_back({"/events/" + token(name), name + " [Hz]", ""});
+  }
+  return quantities;
+}
+
+/// The value of a quantity in a sweep (NaN where that sweep has no such peak or event).
+double value_of(const nlohmann::json& document, const std::string& pointer) {
+  if (pointer.rfind("/events/", 0) == 0) {
+    const std::string name = pointer.substr(8);
+    const std::string kind = name.substr(0, name.rfind(' '));
+    const int index = std::stoi(name.substr(name.rfind(' ') + 1));
+    int seen = 0;
+    for (const nlohmann::json& event : document.at("events")) {
+      if (event.at("kind") == kind && ++seen == index) return event.at("frequency_hz").get<double>();
+    }
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  const nlohmann::json::json_pointer at(pointer);
+  if (!document.contains(at) || !document[at].is_number()) return std::numeric_limits<double>::quiet_NaN();
+  return document[at].get<double>();
+}
+
+/// The sweeps of one `crackle sweep` with its estimate: each setting swept once, the first (the
+/// scene's own) into the output folder with its progress, the others silent in temporary folders.
+class Sweeps {
+ public:
+  Sweeps(const scene::Scene& scene, const std::vector<scene::Override>& overrides, const SweepCommandOptions& options,
+         std::ostream& out, std::ostream& progress)
+      : scene_(scene), overrides_(overrides), options_(options), out_(out), progress_(progress),
+        folders_(options.output_directory, options.modal_cache) {}
+
+  const SweepOutcome& get(const Setting& setting, bool first = false) {
+    const auto found = outcomes_.find(setting.key());
+    if (found != outcomes_.end()) return found->second;
+    SweepCommandOptions options = options_;
+    options.modal_cache = folders_.cache();
+    options.output_directory = folders_.folder(setting, first);
+    std::vector<scene::Override> overrides = overrides_;
+    if (!first) {
+      for (const scene::Override& level : level_overrides(setting)) overrides.push_back(level);
+      options.progress = false;
+    }
+    const scene::Scene scene = first ? scene_ : scene::load_scene(options_.scene_path, overrides);
+    NullStream silent;
+    SweepOutcome outcome = sweep_scene(scene, options, first ? out_ : silent, first ? progress_ : silent);
+    if (!first) {
+      out_ << "accuracy: refinement sweep " << describe(setting) << ": " << std::setprecision(3) << outcome.wall_s
+           << " s\n";
+      refinement_s_ += outcome.wall_s;
+    }
+    const nlohmann::json& model = outcome.document.at("model");
+    runs_.push_back({{"setting", describe(setting)},
+                     {"order", setting.order},
+                     {"harmonics", harmonics(setting)},
+                     {"max_frequency_hz", model.at("max_frequency_hz")},
+                     {"modes", model.at("modes")},
+                     {"pairs", model.at("pairs")},
+                     {"points", outcome.document.at("points")},
+                     {"wall_s", outcome.wall_s},
+                     {"main", first}});
+    if (first) first_key_ = setting.key();
+    return outcomes_.emplace(setting.key(), std::move(outcome)).first->second;
+  }
+
+  void adopt(const Setting& setting) const { folders_.adopt(setting); }
+
+  std::string describe(const Setting& setting) const {
+    std::string text = "order " + std::to_string(setting.order);
+    if (setting.band) text += ", band x" + std::to_string(1 << setting.band);
+    text += ", H = " + std::to_string(harmonics(setting));
+    return text;
+  }
+  int harmonics(const Setting& setting) const { return scene_.sweep->harmonics + kHarmonicsStep * setting.harmonics; }
+  const nlohmann::json& runs_json() const { return runs_; }
+  double refinement_s() const { return refinement_s_; }
+  bool box_mesh() const { return scene_.gmsh_file.empty(); }
+
+ private:
+  std::vector<scene::Override> level_overrides(const Setting& setting) const {
+    const double base = outcomes_.at(first_key_).document.at("model").at("max_frequency_hz").get<double>();
+    std::vector<scene::Override> levels = order_and_band_overrides(scene_, setting, base);
+    levels.push_back({"sweep.harmonics", std::to_string(harmonics(setting))});
+    // Half the points: the peaks are read off a parabola through the three points around them, which
+    // moves them by less than 1e-6 between 200 and 100 points on the beam (docs/benchmarks.md 11.5),
+    // far below the changes the refinements measure; the continuation costs about half.
+    if (scene_.sweep->method == "harmonic_balance") {
+      levels.push_back({"sweep.points", std::to_string(std::max(10, scene_.sweep->points / 2))});
+    }
+    // The Floquet multipliers only find period doublings (folds come from the tangent): without one
+    // in the scene's sweep, and without a period-two branch to switch to, the refinements skip them.
+    const bool doubling = std::any_of(base_events().begin(), base_events().end(), [](const nlohmann::json& event) {
+      return event.at("kind") == "period_doubling";
+    });
+    if (scene_.sweep->stability && !doubling && scene_.sweep->subharmonic != 2) {
+      levels.push_back({"sweep.stability", "false"});
+    }
+    return levels;
+  }
+
+  const nlohmann::json& base_events() const { return outcomes_.at(first_key_).document.at("events"); }
+
+  const scene::Scene& scene_;
+  std::vector<scene::Override> overrides_;
+  SweepCommandOptions options_;
+  std::ostream& out_;
+  std::ostream& progress_;
+  RefinementFolders folders_;
+  std::map<std::string, SweepOutcome> outcomes_;
+  std::string first_key_;
+  nlohmann::json runs_ = nlohmann::json::array();
+  double refinement_s_ = 0.0;
+};
+
+accuracy::Estimate estimate_of(const Quantity& quantity, Sweeps& sweeps, const Setting& setting) {
+  const double value = value_of(sweeps.get(setting).document, quantity.pointer);
+  const Neighbours n = neighbours(setting, sweeps.box_mesh());
+  const auto at = [&](const Setting& level) { return value_of(sweeps.get(level).document, quantity.pointer); };
+  std::vector<accuracy::Component> components;
+  components.push_back(n.coarse ? mesh_component(value, true, at(*n.coarser), at(*n.coarse), sweeps.box_mesh())
+                                : mesh_component(value, false, 0.0, 0.0, sweeps.box_mesh()));
+  if (!quantity.modal) {  // the modal stage does not depend on the reduced model's band or on H
+    const double band = at(n.band), harmonics = at(n.harmonics);
+    components.push_back(std::isfinite(band) ? accuracy::one_refinement("modes", value, band, 2.0, 2.0)
+                                             : missing_component("modes", value));
+    const double ratio = double(sweeps.harmonics(n.harmonics)) / sweeps.harmonics(setting);
+    components.push_back(std::isfinite(harmonics)
+                             ? accuracy::one_refinement("harmonics", value, harmonics, ratio, kHarmonicsOrder)
+                             : missing_component("harmonics", value));
+  }
+  return accuracy::combine(quantity.label, value, components);
+}
+
+/// Every quantity's estimate at a setting, with the largest error among the tolerance's quantities
+/// and, per component, the largest |delta| among them.
+struct SettingEstimate {
+  nlohmann::json json = nlohmann::json::object();
+  std::vector<accuracy::Estimate> lines;  ///< the tolerance's quantities, for the terminal
+  SettingSummary summary;
+};
+
+SettingEstimate estimate_setting(Sweeps& sweeps, const Setting& setting, const std::vector<std::string>& counted) {
+  SettingEstimate result;
+  for (const Quantity& quantity : quantities_of(sweeps.get(setting).document)) {
+    const accuracy::Estimate estimate = estimate_of(quantity, sweeps, setting);
+    result.json[nlohmann::json::json_pointer(quantity.pointer)] = estimate_json(estimate);
+    if (std::find(counted.begin(), counted.end(), quantity.tolerance_quantity) == counted.end()) continue;
+    result.lines.push_back(estimate);
+    add_to_summary(estimate, result.summary);
+  }
+  return result;
+}
+
+/// The next setting the tolerance refines to: the component with the largest error per second of
+/// its refinement sweep, or empty with `blocking` saying why none can go on.
+std::optional<Setting> refine(Sweeps& sweeps, const Setting& setting, const SettingSummary& summary,
+                              double budget_left, std::string& blocking) {
+  const Neighbours n = neighbours(setting, sweeps.box_mesh());
+  std::vector<RefinementChoice> choices;
+  const double here = sweeps.get(setting).wall_s;
+  if (n.coarse) {
+    Setting finer = setting;
+    finer.order += 1;
+    choices.push_back({"mesh", finer, here * here / std::max(1e-3, sweeps.get(*n.coarse).wall_s)});
+  }
+  choices.push_back({"modes", n.band, sweeps.get(n.band).wall_s});
+  choices.push_back({"harmonics", n.harmonics, sweeps.get(n.harmonics).wall_s});
+  return choose_refinement(choices, summary, budget_left,
+                           sweeps.box_mesh() && !n.coarse ? "mesh (not estimated below element order 3)"
+                                                          : "none (no component has an error left)",
+                           blocking);
+}
+
+}  // namespace
+
+void sweep_with_accuracy(const scene::Scene& scene, const RunRoute& route, const std::vector<scene::Override>& overrides,
+                         const SweepCommandOptions& options, std::ostream& out, std::ostream& progress) {
+  Stopwatch total;
+  const fs::path& directory = options.output_directory;
+  if (route.automatic) out << "route: " << route.reason << "\n";
+  const EstimatePlan plan = sweep_plan(scene, route);
+  if (!plan.estimate) {
+    SweepOutcome outcome = sweep_scene(scene, options, out, progress);
+    outcome.document["route"] = route_json(route);
+    outcome.document["accuracy"] = {{"estimated", false}, {"reason", plan.reason}};
+    outcome.document["wall_s"] = total.seconds();
+    io::write_json(directory / "sweep.json", outcome.document);
+    if (scene.has_accuracy_section) std::cerr << "crackle: note: accuracy: not estimated: " << plan.reason << "\n";
+    out << "wrote " << (directory / "sweep.json").string() << "\n";
+    return;
+  }
+  io::ensure_directory(directory);
+  Sweeps sweeps(scene, overrides, options, out, progress);
+  Setting setting;
+  setting.order = scene.box.order;
+  const double run_s = sweeps.get(setting, true).wall_s;
+  // The tolerance applies to accuracy.quantities: each probe's peak values and the bilinear frequency.
+  const std::vector<std::string>& counted = scene.accuracy.quantities;
+  SettingEstimate estimate = estimate_setting(sweeps, setting, counted);
+  const ToleranceOutcome outcome = reach_tolerance(
+      plan.tolerance, setting, estimate.summary,
+      [&](const Setting& from, std::string& blocking) {
+        return refine(sweeps, from, estimate.summary, scene.accuracy.budget_s - total.seconds(), blocking);
+      },
+      [&](const Setting& at) {
+        estimate = estimate_setting(sweeps, at, counted);
+        return estimate.summary;
+      },
+      [&](const Setting& at) { return sweeps.describe(at); }, out);
+  nlohmann::json document = sweeps.get(setting).document;
+  sweeps.adopt(setting);
+  for (const accuracy::Estimate& line : estimate.lines) out << "accuracy " << accuracy::estimate_line(line) << "\n";
+  const double wall = total.seconds();
+  nlohmann::json accuracy = accuracy_summary(sweeps.describe(setting), plan.tolerance, counted, scene.accuracy.budget_s,
+                                             estimate.summary, outcome, sweeps.runs_json(), run_s,
+                                             sweeps.refinement_s(), wall);
+  accuracy["method"] =
+      "one refinement per component from the setting swept (DETECTION.md sec. 1): mesh: the two lower element orders "
+      "(Richardson with the observed rate per order, GCI safety factor 1.25, 3 where not asymptotic); modes: twice "
+      "the band; harmonics: H + 2 (the change, three times: the convergence in H is not monotone); the refinement "
+      "sweeps take half the points. Estimated: each probe's peaks (value and frequency, the parabola through the "
+      "three points around the largest, or the value at a range end), the fold and period-doubling frequencies (by "
+      "kind and order along the branch) and the bilinear frequency. delta: signed relative error of the value, "
+      "error: sum of |delta|, rss: root-sum-square";
+  accuracy.update(estimate.json);  // probes, bilinear_hz, events: each number's estimate at its own place
+  document["route"] = route_json(route);
+  document["accuracy"] = accuracy;
+  document["wall_s"] = wall;
+  io::write_json(directory / "sweep.json", document);
+  print_accuracy_end(out, plan.tolerance, outcome, estimate.summary, counted, sweeps.runs_json().size() - 1, "sweeps",
+                     sweeps.refinement_s(), wall);
+  out << "wrote " << (directory / "sweep.json").string() << "\n";
+}
+
+}  // namespace crackle::pipeline
