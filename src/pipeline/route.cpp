@@ -13,22 +13,6 @@ std::string cells_text(const std::array<int, 3>& cells) {
   return "[" + std::to_string(cells[0]) + ", " + std::to_string(cells[1]) + ", " + std::to_string(cells[2]) + "]";
 }
 
-/// Why the reduced model does not serve this scene's run (empty: it does).
-std::string reduced_route_refusal(const scene::Scene& scene, int ranks) {
-  const scene::TransientSection& transient = *scene.transient;
-  if (ranks > 1) return "mpirun -np " + std::to_string(ranks) + " (one transient over several processes is the full model)";
-  if (!transient.excitation || transient.excitation->kind != "harmonic") {
-    return "no harmonic excitation (a pulse or free vibration has content above any retained band)";
-  }
-  if (!scene.spectrum) return "no spectrum: section (no signature to compute)";
-  if (!scene.has_crack() || transient.variant != "open") return "no crack to breathe (a linear run)";
-  if (scene.contact.model != "penalty") return "crack.contact.model: none (a linear run)";
-  if (transient.time_step) return "an explicit transient.time_step";
-  if (!transient.initial.empty()) return "transient.initial fields (the full model takes them as given)";
-  if (transient.release) return "a transient.release (the full model starts from it as given)";
-  return "";
-}
-
 /// `mesh.box.grading` as a map with mode always and the scene's layers, ratio and fronts (the scene
 /// may have written the key as a plain mode, which a `.mode` override could not reach).
 std::string grading_always(const scene::Scene& scene) {
@@ -132,7 +116,7 @@ RunRoute choose_route(const scene::Scene& scene, int ranks) {
     return route;
   }
   route.automatic = true;
-  const std::string refusal = reduced_route_refusal(scene, ranks);
+  const std::string refusal = scene::reduced_route_refusal(scene, ranks);
   if (!refusal.empty()) {
     route.model = "full";
     route.reason = "transient.model: auto took the full explicit model: " + refusal;
@@ -159,7 +143,7 @@ RunRoute choose_sweep_route(const scene::Scene& scene) {
   }
   route.automatic = true;
   route.reason = "transient.model: auto: the sweep's reduced model";
-  if (!scene.has_crack() || scene.contact.model != "penalty") {
+  if (scene.gmsh_file.empty() && !scene::takes_route_mesh(scene, "sweep")) {
     route.reason += " on the scene's mesh (no breathing crack whose front needs the graded mesh)";
     return route;
   }

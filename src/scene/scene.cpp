@@ -961,6 +961,27 @@ Scene scene_from(const Values& values) {
 
 }  // namespace
 
+std::string reduced_route_refusal(const Scene& scene, int ranks) {
+  const TransientSection& transient = *scene.transient;
+  if (ranks > 1) return "mpirun -np " + std::to_string(ranks) + " (one transient over several processes is the full model)";
+  if (!transient.excitation || transient.excitation->kind != "harmonic") {
+    return "no harmonic excitation (a pulse or free vibration has content above any retained band)";
+  }
+  if (!scene.spectrum) return "no spectrum: section (no signature to compute)";
+  if (!scene.has_crack() || transient.variant != "open") return "no crack to breathe (a linear run)";
+  if (scene.contact.model != "penalty") return "crack.contact.model: none (a linear run)";
+  if (transient.time_step) return "an explicit transient.time_step";
+  if (!transient.initial.empty()) return "transient.initial fields (the full model takes them as given)";
+  if (transient.release) return "a transient.release (the full model starts from it as given)";
+  return "";
+}
+
+bool takes_route_mesh(const Scene& scene, const std::string& command) {
+  if (!scene.gmsh_file.empty() || !scene.transient || scene.transient->model != "auto") return false;
+  if (command == "sweep") return scene.sweep && scene.has_crack() && scene.contact.model == "penalty";
+  return command == "run" && reduced_route_refusal(scene, 1).empty();
+}
+
 std::string Scene::where(const std::string& key_path) const {
   const auto found = key_lines.find(key_path);
   const int line = found == key_lines.end() ? -1 : found->second;

@@ -241,6 +241,15 @@ struct Scene {
   std::string where(const std::string& key_path) const;
 };
 
+/// Why the reduced model does not serve `crackle run` of this scene on `ranks` processes under
+/// `transient.model: auto` (empty: it does; the route then takes it, HYBRID.md sec. 1): no harmonic
+/// drive, no spectrum, no breathing crack, mpirun, an explicit time step, initial fields, a release.
+std::string reduced_route_refusal(const Scene& scene, int ranks);
+
+/// Whether `crackle run` (`command` "run") or `crackle sweep` ("sweep") of this scene on one process
+/// takes the automatic route's own graded box mesh (pipeline/route.hpp) instead of the scene's cells.
+bool takes_route_mesh(const Scene& scene, const std::string& command);
+
 struct Param;
 
 /// A parameter-study override: a YAML value for a dotted key path such as `crack.region.z`,

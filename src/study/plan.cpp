@@ -605,7 +605,15 @@ StudyPlan plan_study(const std::string& text, const std::string& file) {
   const bool morphed = !scenes.empty() && std::all_of(scenes.begin(), scenes.end(), [](const scene::Scene& s) {
     return s.crack_reference.has_value();
   });
-  if (format_has_grid_lines() && !morphed) {
+  // Cases whose run or sweep takes the automatic route's own mesh (graded towards their own crack
+  // front) mesh themselves: a mesh with every case's crack edges and fronts would be many times
+  // larger, and the route would lower its order for it (then the mesh error is not estimated).
+  const bool own_meshes = !scenes.empty() && std::all_of(scenes.begin(), scenes.end(), [&](const scene::Scene& s) {
+    return std::any_of(spec.outputs.begin(), spec.outputs.end(), [&](const std::string& output) {
+      return output != "modal" && scene::takes_route_mesh(s, output == "spectrum" ? "run" : output);
+    });
+  });
+  if (format_has_grid_lines() && !morphed && !own_meshes) {
     const auto lines = shared_crack_lines(scenes);
     for (int axis = 0; axis < 3; ++axis) {
       if (lines[axis].empty()) continue;
@@ -634,7 +642,7 @@ StudyPlan plan_study(const std::string& text, const std::string& file) {
 
   // Graded meshes: every case grades towards the fronts of all cases (from the same grid), so
   // that the cases still share one mesh.
-  if (const std::string grading = morphed ? std::string() : shared_grading(scenes); !grading.empty()) {
+  if (const std::string grading = morphed || own_meshes ? std::string() : shared_grading(scenes); !grading.empty()) {
     for (StudyCase& study_case : plan.cases) study_case.overrides.push_back({"mesh.box.grading", grading});
     plan.shares_grid_lines = true;
   }
@@ -698,6 +706,8 @@ StudyPlan plan_study(const std::string& text, const std::string& file) {
     } catch (const InputError&) {
       study_case.primer_text.clear();
     }
+    // The route's own meshes are not the scene's: modes primed on the scene's mesh would serve no case.
+    if (own_meshes) study_case.primer_text.clear();
   }
   return plan;
 }

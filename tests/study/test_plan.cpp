@@ -362,9 +362,10 @@ TEST(StudyPlan, ModalCacheKeyIgnoresWhatTheUncrackedModesDoNotDependOn) {
   // The primer solves the uncracked modes only.
   const scene::Scene primer = scene::parse_scene(gaps.cases[0].primer_text, "primer.yaml");
   EXPECT_EQ(primer.modal.variants, std::vector<std::string>{"uncracked"});
-  // A scene with a run and its spectrum still has a primer (the spectrum needs the transient).
+  // A scene with a run and its spectrum on the scene's mesh (transient.model: full) still has a
+  // primer (the spectrum needs the transient).
   const std::string run_scene = base_scene() +
-                                "transient:\n  excitation: {face: x+, direction: z, amplitude: 1.0, frequency: 100}\n"
+                                "transient:\n  model: full\n  excitation: {face: x+, direction: z, amplitude: 1.0, frequency: 100}\n"
                                 "  periods: 2\n  probes:\n    - {name: tip, point: [0.2, 0.01, 0.01]}\n"
                                 "spectrum: {harmonics: 3}\n";
   const StudyPlan runs = plan_study(run_scene + "study:\n  vary:\n    crack.gap: [0, 1e-6]\n  outputs: [spectrum]\n",
@@ -394,6 +395,27 @@ TEST(StudyPlan, ModalCacheKeyIgnoresWhatTheUncrackedModesDoNotDependOn) {
   EXPECT_EQ(sweeps.cases[0].modal_key, sweeps.cases[1].modal_key);
   EXPECT_NE(sweeps.cases[0].hash, sweeps.cases[1].hash);
   EXPECT_EQ(sweeps.cases[0].modal_key, windows.cases[0].modal_key);
+}
+
+// Cases whose run takes the automatic route's own graded mesh (transient.model: auto, a harmonic
+// drive, a spectrum, a breathing crack) mesh themselves: no shared crack lines or fronts (a mesh
+// with every case's fronts would make the route lower its order) and no primer on the scene's mesh.
+// The same cases run on the scene's mesh (transient.model: full) share one.
+TEST(StudyPlan, CasesOnTheRoutesOwnMeshMeshThemselves) {
+  const std::string transient =
+      "  excitation: {face: x+, direction: z, amplitude: 1.0, frequency: 100}\n"
+      "  periods: 2\n  probes:\n    - {name: tip, point: [0.2, 0.01, 0.01]}\nspectrum: {harmonics: 3}\n"
+      "study:\n  vary:\n    crack.region.z: [[0.007, 0.01], [0.006, 0.01]]\n  outputs: [spectrum]\n";
+  const StudyPlan routed = plan_study(base_scene() + "transient:\n" + transient, "b.yaml");
+  EXPECT_FALSE(routed.shares_grid_lines);
+  for (const StudyCase& study_case : routed.cases) {
+    EXPECT_TRUE(study_case.primer_text.empty());
+    for (const scene::Override& override : study_case.overrides) {
+      EXPECT_NE(override.path.rfind("mesh.box", 0), 0u) << override.path << " = " << override.value;
+    }
+  }
+  const StudyPlan written = plan_study(base_scene() + "transient:\n  model: full\n" + transient, "b.yaml");
+  EXPECT_TRUE(written.shares_grid_lines);
 }
 
 TEST(StudyPlan, YamlValuesAsJson) {
