@@ -27,7 +27,7 @@ constexpr int kHarmonicsStep = 2;
 /// The harmonic-balance truncation error is taken as the change from H to H + 2, three times (an
 /// order unknown, Fs = 3): on data/beam.yaml's route the peak A2/A1 at H = 15, 17, 21, 31 is
 /// 0.154913, 0.154993, 0.154952, 0.154881, not monotone, so no rate can be fitted to it
-/// (docs/benchmarks.md section 11.5).
+/// (docs/benchmarks.md section 11.6).
 constexpr double kHarmonicsOrder = 0.0;
 
 EstimatePlan sweep_plan(const scene::Scene& scene, const RunRoute& route) {
@@ -175,7 +175,7 @@ class Sweeps {
     std::vector<scene::Override> levels = order_and_band_overrides(scene_, setting, base);
     levels.push_back({"sweep.harmonics", std::to_string(harmonics(setting))});
     // Half the points: the peaks are read off a parabola through the three points around them, which
-    // moves them by less than 1e-6 between 200 and 100 points on the beam (docs/benchmarks.md 11.5),
+    // moves them by less than 1e-6 between 200 and 100 points on the beam (docs/benchmarks.md 11.6),
     // far below the changes the refinements measure; the continuation costs about half.
     if (scene_.sweep->method == "harmonic_balance") {
       levels.push_back({"sweep.points", std::to_string(std::max(10, scene_.sweep->points / 2))});

@@ -19,7 +19,7 @@ namespace fs = std::filesystem;
 namespace {
 
 // The peak of A2/A1 on data/beam.yaml's sweep (near f_b/2), converged by hand (docs/benchmarks.md
-// section 11.5): 0.154979 on the route's order 4 on [20, 2, 1] with 5 front layers (the route has
+// section 11.6): 0.154979 on the route's order 4 on [20, 2, 1] with 5 front layers (the route has
 // 3), the band doubled and H = 31 (the route's 15), plus the layers beyond 5 extrapolated as for the
 // run's A2/A1 (section 11.1: +7e-6).
 constexpr double kReferencePeakA2 = 0.154986;
