@@ -3,7 +3,9 @@
 cases of data/beam.yaml (5 crack depths x 2 positions), each case's A2/A1 and A1 against a reference
 converged by hand on the same case; the share of cases within 1 %.
 
-Usage: bench/tolerance_study.py CRACKLE OUTDIR [--jobs N]
+Usage: bench/tolerance_study.py CRACKLE OUTDIR [--jobs N] [--references OLD_OUTDIR]
+(--references: take the reference runs of an earlier OUTDIR instead of running them again; they do
+not depend on the route or the estimate.)
 
 1. `crackle study` of the scene below (the beam as written: uniform [40, 4, 2] cells, p = 2, no
    accuracy keys), `outputs: [spectrum]`: every case takes the default route (the reduced model on
@@ -66,8 +68,13 @@ def main():
     study_s = time.monotonic() - start
     cases = sorted(d for d in os.listdir(os.path.join(study_dir, "cases")))
     folders = [os.path.join(study_dir, "cases", c) for c in cases]
-    with concurrent.futures.ThreadPoolExecutor(jobs) as pool:
-        refs = list(pool.map(lambda f: reference(crackle, f, f + "-reference"), folders))
+    if "--references" in sys.argv:
+        old = os.path.join(sys.argv[sys.argv.index("--references") + 1], "study", "cases")
+        refs = [(json.load(open(os.path.join(old, c + "-reference", "spectrum.json")))["probes"]["tip"], float("nan"))
+                for c in cases]
+    else:
+        with concurrent.futures.ThreadPoolExecutor(jobs) as pool:
+            refs = list(pool.map(lambda f: reference(crackle, f, f + "-reference"), folders))
     rows, within = [], 0
     for folder, (ref, ref_s) in zip(folders, refs):
         spectrum = json.load(open(os.path.join(folder, "spectrum.json")))

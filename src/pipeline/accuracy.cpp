@@ -100,9 +100,11 @@ class Runs {
 
   std::string describe(const Setting& setting) const {
     std::string text = "order " + std::to_string(setting.order);
+    if (setting.layers) text += ", front layers +" + std::to_string(setting.layers);
     if (setting.band) text += ", band x" + std::to_string(1 << setting.band);
     if (setting.steps) text += ", steps x" + std::to_string(1 << setting.steps);
     if (setting.penalty) text += ", penalty x" + std::to_string(1 << (2 * setting.penalty));
+    if (setting.window) text += ", steady state / " + format_number(std::pow(10.0, setting.window));
     return text;
   }
   const nlohmann::json& runs_json() const { return runs_; }
@@ -122,6 +124,13 @@ class Runs {
     if (setting.steps) levels.push_back({"transient.reduced.steps_per_period", std::to_string(steps_per_period(setting))});
     if (setting.penalty) {
       levels.push_back({"crack.contact.penalty", format_number(base.normal_penalty * (1 << (2 * setting.penalty)))});
+    }
+    if (setting.window) {  // the start transient decays further: a tighter steady state, a longer limit
+      const double tolerance = scene_.spectrum->tolerance * std::pow(10.0, -setting.window);
+      levels.push_back({"spectrum.steady_state.tolerance", format_number(tolerance)});
+      if (scene_.transient->periods) {
+        levels.push_back({"transient.periods", format_number(*scene_.transient->periods * (1 << (2 * setting.window)))});
+      }
     }
     return levels;
   }
@@ -239,18 +248,17 @@ std::optional<Setting> refine(Runs& runs, const Setting& setting, const SettingS
   std::vector<RefinementChoice> choices;
   const double here = runs.get(setting).wall_s;
   if (n.coarse) {
-    Setting finer = setting;
-    finer.order += 1;
+    const Setting finer = finer_mesh(setting);
     const double growth = here / std::max(1e-3, runs.get(*n.coarse).wall_s);
     choices.push_back({"mesh", finer, here * growth});
   }
   choices.push_back({"modes", n.band, runs.get(n.band).wall_s});
   choices.push_back({"steps", n.steps, runs.get(n.steps).wall_s});
   if (runs.has_contact()) choices.push_back({"penalty", n.penalty, runs.get(n.penalty).wall_s});
-  return choose_refinement(choices, summary, budget_left,
-                           "window (the steady-state window change; raise spectrum.steady_state.min_periods or lower "
-                           "its tolerance)",
-                           blocking);
+  // A longer run on the same mesh: the model and modal stage are shared, so it costs about what the
+  // twice-the-steps run did, times two for the longer steady state.
+  choices.push_back({"window", n.window, 2.0 * runs.get(n.steps).wall_s});
+  return choose_refinement(choices, summary, budget_left, "none (no component has an error left)", blocking);
 }
 
 }  // namespace

@@ -8,14 +8,23 @@
 #include <ostream>
 
 #include "core/errors.hpp"
+#include "mesh/box.hpp"
 
 namespace crackle::pipeline {
 
 namespace fs = std::filesystem;
 
 std::string Setting::key() const {
-  return "p" + std::to_string(order) + "-b" + std::to_string(band) + "-s" + std::to_string(steps) + "-k" +
-         std::to_string(penalty) + "-h" + std::to_string(harmonics);
+  return "p" + std::to_string(order) + "-l" + std::to_string(layers) + "-b" + std::to_string(band) + "-s" +
+         std::to_string(steps) + "-k" + std::to_string(penalty) + "-h" + std::to_string(harmonics) + "-w" +
+         std::to_string(window);
+}
+
+Setting finer_mesh(const Setting& setting) {
+  Setting finer = setting;
+  if (finer.order < kHighestOrder) finer.order += 1;
+  else finer.layers += 1;
+  return finer;
 }
 
 Neighbours neighbours(const Setting& setting, bool box_mesh) {
@@ -26,7 +35,8 @@ Neighbours neighbours(const Setting& setting, bool box_mesh) {
     n.coarser = setting;
     n.coarser->order -= 2;
   }
-  n.band = n.steps = n.penalty = n.harmonics = setting;
+  n.band = n.steps = n.penalty = n.harmonics = n.window = setting;
+  n.window.window += 1;
   n.band.band += 1;
   n.steps.steps += 1;
   n.penalty.penalty += 1;
@@ -37,7 +47,16 @@ Neighbours neighbours(const Setting& setting, bool box_mesh) {
 std::vector<scene::Override> order_and_band_overrides(const scene::Scene& scene, const Setting& setting,
                                                       double base_max_frequency_hz) {
   std::vector<scene::Override> levels;
-  if (scene.gmsh_file.empty()) levels.push_back({"mesh.box.order", std::to_string(setting.order)});
+  if (scene.gmsh_file.empty()) {
+    levels.push_back({"mesh.box.order", std::to_string(setting.order)});
+    if (setting.layers > 0 && scene.crack) {
+      mesh::BoxSpec box = scene.box;
+      box.order = setting.order;
+      box.grading = scene.grading.grading;
+      const int layers = mesh::resolve_grading(box, *scene.crack).layers;
+      levels.push_back({"mesh.box.grading.layers", std::to_string(layers + setting.layers)});
+    }
+  }
   if (setting.band) {
     const int modes = scene.transient->reduced.modes;
     if (modes > 0) levels.push_back({"transient.reduced.modes", std::to_string(modes << setting.band)});
@@ -117,9 +136,15 @@ std::optional<Setting> choose_refinement(const std::vector<RefinementChoice>& ch
     blocking = nothing_left;
     return std::nullopt;
   }
-  if (best->name == "mesh" && best->next.order > kHighestOrder) {
-    blocking = "mesh (the highest element order, " + std::to_string(kHighestOrder) +
-               ", is reached; finer cells: mesh.box.cells with transient.model: reduced)";
+  if (best->name == "mesh" && best->next.layers > kMostExtraLayers) {
+    blocking = "mesh (the highest element order, " + std::to_string(kHighestOrder) + ", and " +
+               std::to_string(kMostExtraLayers) + " more front layers are reached; finer cells: mesh.box.cells with "
+               "transient.model: reduced)";
+    return std::nullopt;
+  }
+  if (best->name == "window" && best->next.window > kMostWindowRefinements) {
+    blocking = "window (the steady state tightened " + std::to_string(kMostWindowRefinements) +
+               " times; raise spectrum.steady_state.min_periods or transient.periods)";
     return std::nullopt;
   }
   if (best->cost > budget_left) {

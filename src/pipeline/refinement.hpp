@@ -24,27 +24,37 @@ namespace crackle::pipeline {
 /// (rate ln 2 up to 20).
 inline constexpr double kOrderLevelRatio = 2.718281828459045;
 inline constexpr double kRateMin = 0.6931471805599453, kRateMax = 20.0;
-/// The highest element order (the box mesher's).
+/// The highest element order (the box mesher's); beyond it the mesh is refined by front layers.
 inline constexpr int kHighestOrder = 4;
+/// The most front layers the mesh refinement adds to the scene's at the highest order.
+inline constexpr int kMostExtraLayers = 3;
+/// The most times the steady state is tightened (tolerance / 10, period limit x 4 each).
+inline constexpr int kMostWindowRefinements = 2;
 
-/// One setting of the numerical parameters: the element order, and how many times each other
-/// component was refined: the reduced model's band (x2 each), the steps per period (x2), the
-/// penalty (x4), the harmonics of a harmonic balance (+2).
+/// One setting of the numerical parameters: the element order and the front layers added to the
+/// mesh's (at every order of its mesh levels), and how many times each other component was refined:
+/// the reduced model's band (x2 each), the steps per period (x2), the penalty (x4), the harmonics
+/// of a harmonic balance (+2), the steady state of a run (its tolerance / 10, its period limit x 4).
 struct Setting {
-  int order = 0;
-  int band = 0, steps = 0, penalty = 0, harmonics = 0;
+  int order = 0, layers = 0;
+  int band = 0, steps = 0, penalty = 0, harmonics = 0, window = 0;
   std::string key() const;
 };
+
+/// The next finer mesh of a setting: one order up, or at the highest order one more front layer
+/// (the graded mesh's front converges geometrically in its layers, docs/benchmarks.md 11.1).
+Setting finer_mesh(const Setting& setting);
 
 /// The settings the components of an estimate at a setting need: the two lower orders (the mesh,
 /// on a box at order 3 or more) and one refinement of each other component.
 struct Neighbours {
   std::optional<Setting> coarse, coarser;
-  Setting band, steps, penalty, harmonics;
+  Setting band, steps, penalty, harmonics, window;
 };
 Neighbours neighbours(const Setting& setting, bool box_mesh);
 
-/// The overrides of a setting's element order (on a box) and band (transient.reduced.modes, or
+/// The overrides of a setting's element order and front layers (on a box: the layers the scene's
+/// grading gives at that order, plus the setting's) and band (transient.reduced.modes, or
 /// max_frequency from the scene's own run's `base_max_frequency_hz`), doubled per band level.
 std::vector<scene::Override> order_and_band_overrides(const scene::Scene& scene, const Setting& setting,
                                                       double base_max_frequency_hz);

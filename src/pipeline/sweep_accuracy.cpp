@@ -160,6 +160,7 @@ class Sweeps {
 
   std::string describe(const Setting& setting) const {
     std::string text = "order " + std::to_string(setting.order);
+    if (setting.layers) text += ", front layers +" + std::to_string(setting.layers);
     if (setting.band) text += ", band x" + std::to_string(1 << setting.band);
     text += ", H = " + std::to_string(harmonics(setting));
     return text;
@@ -252,8 +253,7 @@ std::optional<Setting> refine(Sweeps& sweeps, const Setting& setting, const Sett
   std::vector<RefinementChoice> choices;
   const double here = sweeps.get(setting).wall_s;
   if (n.coarse) {
-    Setting finer = setting;
-    finer.order += 1;
+    const Setting finer = finer_mesh(setting);
     choices.push_back({"mesh", finer, here * here / std::max(1e-3, sweeps.get(*n.coarse).wall_s)});
   }
   choices.push_back({"modes", n.band, sweeps.get(n.band).wall_s});

@@ -366,8 +366,10 @@ Param build_parameters() {
           .defaults_to("auto"),
       number("tolerance", "Relative error to reach on accuracy.quantities at every probe: the run refines the "
                           "component with the largest error per unit cost until the estimate (sum of the "
-                          "components) is below it or accuracy.budget is spent; auto: 0.01 with transient.model: "
-                          "auto, else none (the estimate only).").above(0).below(1).or_word("auto").defaults_to("auto"),
+                          "components) is below it or accuracy.budget is spent (the mesh: one order up, at order 4 "
+                          "one more front layer, up to 3; the window: the steady-state tolerance / 10 and "
+                          "transient.periods x 4, twice at most); auto: 0.01 with transient.model: auto, else none "
+                          "(the estimate only).").above(0).below(1).or_word("auto").defaults_to("auto"),
       number("budget", "Wall time the tolerance may spend, all runs together.").with_unit("s").above(0)
           .defaults_to("600"),
       choice("quantities", "Signatures the tolerance applies to (every signature gets its estimate).",
