@@ -99,7 +99,7 @@ class Runs {
   void adopt(const Setting& setting) const { folders_.adopt(setting); }
 
   std::string describe(const Setting& setting) const {
-    std::string text = "order " + std::to_string(setting.order);
+    std::string text = box_mesh() ? "order " + std::to_string(setting.order) : std::string("the Gmsh mesh");
     if (setting.layers) text += ", front layers +" + std::to_string(setting.layers);
     if (setting.band) text += ", band x" + std::to_string(1 << setting.band);
     if (setting.steps) text += ", steps x" + std::to_string(1 << setting.steps);
