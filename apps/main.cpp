@@ -4,9 +4,13 @@
 /// suggestion), out-of-range values are errors naming the option, and every bad command line
 /// exits 2 like any other bad input. PETSc/SLEPc options reach PETSc only through an explicit
 /// channel: after `--`, as `--petsc "-opt value"`, or in the PETSC_OPTIONS environment variable.
+#include <unistd.h>
+
 #include <algorithm>
 #include <CLI/CLI.hpp>
 #include <cstdlib>
+#include <cstring>
+#include <fstream>
 #include <iostream>
 #include <new>
 #include <sstream>
@@ -184,8 +188,31 @@ int bad_command_line(const std::string& message) {
 
 }  // namespace
 
+/// Runs crackle again with glibc's malloc asking for transparent huge pages (GLIBC_TUNABLES
+/// glibc.malloc.hugetlb=1, read only at start-up): the matrices of an order-4 mesh are gigabytes, and
+/// their first-touch page faults were 12 s of system time on the default route; with 2 MB pages
+/// `crackle run data/beam.yaml` takes 25-27 s against 30 s, at the same peak memory
+/// (docs/benchmarks.md 11.3d). Not where the tunable is set already, the kernel has no transparent
+/// huge pages, valgrind runs the process (an exec would leave it), or CRACKLE_NO_HUGE_PAGES is set.
+/// execv returns only when it fails; crackle then runs as it is.
+void use_huge_pages(char** argv) {
+  if (std::getenv("CRACKLE_NO_HUGE_PAGES")) return;
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
+  std::string value = tunables ? tunables : "";
+  if (value.find("glibc.malloc.hugetlb") != std::string::npos) return;
+  const char* preload = std::getenv("LD_PRELOAD");
+  if (preload && (std::strstr(preload, "vgpreload") || std::strstr(preload, "valgrind"))) return;
+  std::ifstream mode("/sys/kernel/mm/transparent_hugepage/enabled");
+  std::string line;
+  if (!std::getline(mode, line) || line.find("[never]") != std::string::npos) return;
+  value += (value.empty() ? "" : ":") + std::string("glibc.malloc.hugetlb=1");
+  if (::setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) return;
+  ::execv("/proc/self/exe", argv);
+}
+
 int main(int argc, char** argv) {
   using namespace crackle;
+  use_huge_pages(argv);
   CLI::App cli{"crackle: nonlinear vibration of elastic bodies with a breathing crack"};
   cli.require_subcommand(1);
   cli.set_version_flag("--version", "crackle 0.1.0");
