@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 
 namespace crackle::accuracy {
 namespace {
@@ -17,6 +18,17 @@ std::string number(double value, int digits) {
   char text[64];
   std::snprintf(text, sizeof text, "%.*g", digits, value);
   return text;
+}
+
+/// An observed order outside its sane range: Fs = 3 and not asymptotic; far outside (below half the
+/// least or above twice the most): not verified.
+void check_order(Component& component, double order, double order_min, double order_max) {
+  if (order >= order_min && order <= order_max) return;
+  component.safety_factor = kCautiousSafetyFactor;
+  component.asymptotic = false;
+  component.reason = "observed order " + number(order, 3) + " outside [" + number(order_min, 3) + ", " +
+                     number(order_max, 3) + "]";
+  if (order < 0.5 * order_min || order > 2.0 * order_max) component.verified = false;
 }
 
 }  // namespace
@@ -57,14 +69,69 @@ Component three_level(const std::string& name, double q1, double q2, double q3, 
   const double order = std::log(levels_ratio) / std::log(ratio);
   component.observed_order = order;
   const double correction = e32 / (levels_ratio - 1.0);  // Q_ext - Q3 (eq. 2)
-  if (order < order_min || order > order_max) {
-    component.safety_factor = kCautiousSafetyFactor;
-    component.asymptotic = false;
-    component.reason = "observed order " + number(order, 3) + " outside [" + number(order_min, 3) + ", " +
-                       number(order_max, 3) + "]";
-    if (order < 0.5 * order_min || order > 2.0 * order_max) component.verified = false;
-  }
+  check_order(component, order, order_min, order_max);
   component.delta = component.safety_factor * relative(correction, q3);
+  return component;
+}
+
+Component three_level_at(const std::string& name, double q1, double q2, double q3, int run, double ratio,
+                         double order_min, double order_max) {
+  Component component = three_level(name, q1, q2, q3, ratio, order_min, order_max);
+  if (run >= 3 || !std::isfinite(component.delta)) return component;
+  const double value = run == 1 ? q1 : q2;
+  component.value = value;
+  if (component.safety_factor == kCautiousSafetyFactor && component.observed_order == 0.0) {
+    // Non-monotone or not converging: three times the change to the next level.
+    component.delta = kCautiousSafetyFactor * relative((run == 1 ? q2 : q3) - value, value);
+    return component;
+  }
+  if (q1 == q2 && q2 == q3) return component;
+  const double extrapolated = q3 + (q3 - q2) / (component.ratio - 1.0);  // eq. 2
+  component.delta = component.safety_factor * relative(extrapolated - value, value);
+  return component;
+}
+
+Component three_level_sizes(const std::string& name, double q1, double q2, double q3, double h1, double h2,
+                            double h3, int run, double order_min, double order_max, double safety_factor) {
+  const double r21 = h1 / h2, r32 = h2 / h3;
+  if (!(r21 > 1.0) || !(r32 > 1.0)) {
+    throw std::invalid_argument("three_level_sizes: the cell sizes must decrease from level to level");
+  }
+  // The levels' ratio as a function of the order; it grows with p from (ln r21 / ln r32 at p -> 0)
+  // and is solved by bisection on a bracket wide enough for any sane order.
+  const auto levels_ratio = [&](double p) {
+    return std::pow(r32, p) * (std::pow(r21, p) - 1.0) / (std::pow(r32, p) - 1.0);
+  };
+  Component component = three_level(name, q1, q2, q3, 2.0, order_min, order_max);  // the checks
+  if (!std::isfinite(component.delta) || component.observed_order == 0.0) {
+    // A level without a value, equal levels, or a non-monotone or not converging refinement:
+    // three_level_at's cautious answer.
+    return three_level_at(name, q1, q2, q3, run, 2.0, order_min, order_max);
+  }
+  const double target = component.ratio;
+  double low = 1e-6, high = 64.0;
+  if (levels_ratio(low) > target || levels_ratio(high) < target) {
+    component = three_level_at(name, q1, q2, q3, run, 2.0, order_min, order_max);
+    component.safety_factor = kCautiousSafetyFactor;
+    component.asymptotic = component.verified = false;
+    component.reason = "no order reproduces the levels' ratio " + number(target, 3);
+    return component;
+  }
+  for (int i = 0; i < 200; ++i) {
+    const double middle = 0.5 * (low + high);
+    (levels_ratio(middle) < target ? low : high) = middle;
+  }
+  const double order = 0.5 * (low + high);
+  component.observed_order = order;
+  component.safety_factor = safety_factor;
+  component.asymptotic = component.verified = true;
+  component.reason.clear();
+  check_order(component, order, order_min, order_max);
+  const double value = run == 1 ? q1 : run == 2 ? q2 : q3;
+  const double extrapolated = q3 + (q3 - q2) / (std::pow(r32, order) - 1.0);  // eq. 2
+  component.value = value;
+  component.refined = q3;
+  component.delta = component.safety_factor * relative(extrapolated - value, value);
   return component;
 }
 

@@ -35,6 +35,24 @@ struct Component {
 Component three_level(const std::string& name, double q1, double q2, double q3, double ratio,
                       double order_min, double order_max);
 
+/// Three levels as three_level, but the error of the level that was run, `run` = 1, 2 or 3 (Q1, Q2
+/// or Q3 = three_level): Fs (Q_ext - Q_run) / |Q_run|, where the finer levels are refinements of the
+/// setting that was run (a modal solve estimated by the next element orders). In the cautious cases
+/// Fs = 3 times the change to the next level (for Q3, the change from Q2).
+Component three_level_at(const std::string& name, double q1, double q2, double q3, int run, double ratio,
+                         double order_min, double order_max);
+
+/// Three levels whose refinement ratio is not constant (Celik et al. 2008): representative cell
+/// sizes h1 > h2 > h3 (for example DOFs^-1/3 of p-levels), Q_k = Q* + C h_k^p with p solved from
+/// (Q1 - Q2)/(Q2 - Q3) = r32^p (r21^p - 1)/(r32^p - 1) (eq. 1 with non-uniform ratios), Q_ext =
+/// Q3 + (Q3 - Q2)/(r32^p - 1) (eq. 2), and the error of level `run` (1, 2 or 3) as three_level_at.
+/// Equal ratios give three_level_at exactly. `safety_factor`: Fs with an order in range (3 where the
+/// levels are not geometrically similar grids, as p-levels on one grid: Roache's value for a study
+/// whose asymptotic range the levels cannot show).
+Component three_level_sizes(const std::string& name, double q1, double q2, double q3, double h1, double h2,
+                            double h3, int run, double order_min, double order_max,
+                            double safety_factor = kSafetyFactor);
+
 /// One refinement from the setting that was run (value) to a finer one (refined) whose error is
 /// expected to fall as refinement^-order: the error of `value` is (refined - value) r^p / (r^p - 1).
 /// order <= 0: the convergence order is unknown (modal truncation): the change itself, times Fs = 3.

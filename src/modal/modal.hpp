@@ -194,9 +194,15 @@ nlohmann::json modal_json(const ModalResult& result);
 std::string modal_table(const ModalResult& result);
 
 /// Writes DIR/modal.json, DIR/modes.csv and DIR/modes_<variant>.vtu (all modes as point data).
+/// `accuracy` (given): modal.json's `accuracy` block, whose estimates at `pairs[i].<field>` or
+/// `variants.<name>.frequencies_hz[i]` give modes.csv its "<column> error [-]" columns.
 /// Collective-free: call it on one rank (see is_output_rank()).
 void write_modal_outputs(const std::filesystem::path& directory, const mesh::Mesh& mesh,
-                         const ModalResult& result);
+                         const ModalResult& result, const nlohmann::json* accuracy = nullptr);
+
+/// modal.json and modes.csv alone, as write_modal_outputs writes them (the mode shapes unchanged).
+void write_modal_tables(const std::filesystem::path& directory, const ModalResult& result,
+                        const nlohmann::json* accuracy = nullptr);
 
 /// True on the rank that writes files (rank 0, or any process without MPI).
 inline bool is_output_rank() { return mpi_rank() == 0; }

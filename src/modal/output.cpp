@@ -1,5 +1,6 @@
 /// \file Modal outputs: modal.json, modes.csv, mode-shape VTU files and the terminal table.
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 #include <nlohmann/json.hpp>
@@ -145,15 +146,27 @@ std::string modal_table(const ModalResult& result) {
   return text;
 }
 
-void write_modal_outputs(const std::filesystem::path& directory, const mesh::Mesh& mesh,
-                         const ModalResult& result) {
+void write_modal_tables(const std::filesystem::path& directory, const ModalResult& result,
+                        const nlohmann::json* accuracy_block) {
   io::ensure_directory(directory);
-  io::write_json(directory / "modal.json", modal_json(result));
+  const nlohmann::json accuracy = accuracy_block ? *accuracy_block : nlohmann::json();
+  nlohmann::json document = modal_json(result);
+  if (!accuracy.is_null()) document["accuracy"] = accuracy;
+  io::write_json(directory / "modal.json", document);
 
+  // The estimated relative error (the sum of its components) of one frequency, NaN where none.
+  auto error_of = [&](const nlohmann::json& estimate) {
+    return estimate.is_object() && estimate.value("error", nlohmann::json()).is_number()
+               ? estimate["error"].get<double>()
+               : std::numeric_limits<double>::quiet_NaN();
+  };
+  const bool estimated = accuracy.is_object() && accuracy.value("estimated", false);
   io::CsvTable table;
   if (!result.pairs.empty()) {
     std::vector<double> mode, f_u, open_mode, f_o, ratio, mac, f_b, paired;
-    for (const ModePair& pair : result.pairs) {
+    std::vector<double> f_u_error, f_o_error, f_b_error;
+    for (std::size_t i = 0; i < result.pairs.size(); ++i) {
+      const ModePair& pair = result.pairs[i];
       mode.push_back(pair.uncracked_mode + 1);
       f_u.push_back(pair.f_uncracked_hz);
       open_mode.push_back(pair.open_mode + 1);
@@ -162,6 +175,12 @@ void write_modal_outputs(const std::filesystem::path& directory, const mesh::Mes
       mac.push_back(pair.mac);
       f_b.push_back(pair.f_bilinear_hz);
       paired.push_back(pair.paired ? 1.0 : 0.0);
+      if (estimated) {
+        const nlohmann::json& estimates = accuracy.at("pairs").at(i);
+        f_u_error.push_back(error_of(estimates.value("f_uncracked_hz", nlohmann::json())));
+        f_o_error.push_back(error_of(estimates.value("f_open_hz", nlohmann::json())));
+        f_b_error.push_back(error_of(estimates.value("f_bilinear_hz", nlohmann::json())));
+      }
     }
     table.add("mode [-]", mode);
     table.add("f_uncracked [Hz]", f_u);
@@ -171,6 +190,11 @@ void write_modal_outputs(const std::filesystem::path& directory, const mesh::Mes
     table.add("mac [-]", mac);
     table.add("f_bilinear [Hz]", f_b);
     table.add("paired [-]", paired);
+    if (estimated) {
+      table.add("f_uncracked error [-]", f_u_error);
+      table.add("f_open error [-]", f_o_error);
+      table.add("f_bilinear error [-]", f_b_error);
+    }
   } else if (!result.variants.empty()) {
     std::vector<double> mode;
     for (int i = 0; i < result.variants.front().modes.n_modes(); ++i) mode.push_back(i + 1);
@@ -179,8 +203,20 @@ void write_modal_outputs(const std::filesystem::path& directory, const mesh::Mes
       table.add(std::string("f_") + mesh::variant_name(variant.variant) + " [Hz]",
                 to_std(variant.modes.frequencies_hz));
     }
+    for (const VariantResult& variant : result.variants) {
+      if (!estimated) break;
+      const nlohmann::json& estimates = accuracy.at("variants").at(mesh::variant_name(variant.variant)).at("frequencies_hz");
+      std::vector<double> errors;
+      for (int i = 0; i < variant.modes.n_modes(); ++i) errors.push_back(error_of(estimates.at(i)));
+      table.add(std::string("f_") + mesh::variant_name(variant.variant) + " error [-]", errors);
+    }
   }
   io::write_csv(directory / "modes.csv", table);
+}
+
+void write_modal_outputs(const std::filesystem::path& directory, const mesh::Mesh& mesh,
+                         const ModalResult& result, const nlohmann::json* accuracy_block) {
+  write_modal_tables(directory, result, accuracy_block);
 
   for (const VariantResult& variant : result.variants) {
     std::vector<io::PointField> fields;

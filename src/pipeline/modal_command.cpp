@@ -1,4 +1,8 @@
 #include <algorithm>
+#include <chrono>
+#include <iomanip>
+#include <memory>
+#include <tuple>
 #include <cstdlib>
 #include <iostream>
 #include <string>
@@ -11,6 +15,8 @@
 #include "io/files.hpp"
 #include "pipeline/distributed_run.hpp"
 #include "pipeline/limits.hpp"
+#include "pipeline/modal_accuracy.hpp"
+#include "pipeline/refinement.hpp"
 #include "pipeline/model.hpp"
 #include "pipeline/output_folder.hpp"
 #include "modal/modal.hpp"
@@ -64,7 +70,12 @@ modal::ModalOptions modal_options(const scene::ModalSection& section) {
 }
 
 void run_modal_command(const ModalCommandOptions& options, std::ostream& out, const ModalInspect& inspect) {
-  const scene::Scene scene = scene::load_scene(options.scene_path, parse_overrides(options.overrides));
+  const auto started = std::chrono::steady_clock::now();
+  auto seconds_since = [](std::chrono::steady_clock::time_point since) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+  };
+  const std::vector<scene::Override> overrides = parse_overrides(options.overrides);
+  const scene::Scene scene = scene::load_scene(options.scene_path, overrides);
   scene::ModalSection section = scene.modal;
   if (options.modes > 0) section.modes = options.modes;
   if (!options.solver.empty()) section.solver = options.solver;
@@ -73,17 +84,70 @@ void run_modal_command(const ModalCommandOptions& options, std::ostream& out, co
   check_memory(scene, matrices::eigen_solve, MeshUse::modal);
   std::optional<OutputFolder> folder;
   if (writer) folder.emplace(options.output_directory, "modal", options.scene_path, options.overwrite, std::cerr);
+  if (scene.has_accuracy_section && scene.accuracy.quantities != scene::AccuracySection{}.quantities) {
+    out << "note: accuracy.quantities is of crackle run's and sweep's signatures; crackle modal estimates every "
+           "frequency\n";
+  }
   try {
-    const Model model = build_model(scene, MeshUse::modal);
     modal::ModalOptions modal_settings = modal_options(section);
     modal_settings.cache_directory = options.modal_cache;
-    const modal::ModalResult result = modal::run_modal(
-        [&model](mesh::Variant variant) -> const fem::System& { return *model.system(variant); }, modal_settings);
+    auto solve = [&](const scene::Scene& at) {
+      const auto start = std::chrono::steady_clock::now();
+      auto model = std::make_unique<Model>(build_model(at, MeshUse::modal));
+      const Model& held = *model;
+      modal::ModalResult result = modal::run_modal(
+          [&held](mesh::Variant variant) -> const fem::System& { return *held.system(variant); }, modal_settings);
+      return std::make_tuple(std::move(model), std::move(result), seconds_since(start));
+    };
+    auto [model, result, run_s] = solve(scene);
+    if (writer) modal::write_modal_outputs(options.output_directory, model->mesh, result);
+
+    // The estimate: the plan's other orders, solved one after the other (DETECTION.md sec. 1).
+    const ModalLevelPlan plan = modal_level_plan(scene, launched_ranks());
+    nlohmann::json block = modal_accuracy_not_estimated(plan.reason);
+    std::vector<std::string> lines;
+    if (plan.estimate) {
+      const auto estimate_started = std::chrono::steady_clock::now();
+      std::vector<ModalLevel> levels = {modal_level(result, plan.run_order, run_s)};
+      std::string lacking;
+      for (int order : plan.orders) {
+        if (order == plan.run_order) continue;
+        std::vector<scene::Override> at_order = overrides;
+        at_order.push_back({"mesh.box.order", std::to_string(order)});
+        const scene::Scene level_scene = scene::load_scene(options.scene_path, at_order);
+        try {
+          // A lower order needs less than the solve that ran; the memory now free says little about it.
+          if (order > plan.run_order) check_memory(level_scene, matrices::eigen_solve, MeshUse::modal);
+        } catch (const Error& refused) {
+          lacking += std::string(lacking.empty() ? "" : "; ") + "order " + std::to_string(order) + ": " + refused.what();
+          continue;
+        }
+        auto [level_model, level_result, level_s] = solve(level_scene);
+        levels.push_back(modal_level(level_result, order, level_s));
+      }
+      const double estimate_s = seconds_since(estimate_started);
+      const ModalAccuracy accuracy = modal_accuracy(plan, levels, estimate_s, seconds_since(started));
+      block = accuracy.block;
+      if (!lacking.empty()) block["lacking"] = lacking;
+      lines = accuracy.lines;
+    }
     if (!writer) return;
-    modal::write_modal_outputs(options.output_directory, model.mesh, result);
+    modal::write_modal_tables(options.output_directory, result, &block);
     folder->finish("done");
     out << modal::modal_table(result);
-    if (inspect) inspect(model, result);
+    for (const std::string& line : lines) out << line << "\n";
+    if (!plan.estimate) out << "accuracy: not estimated (" << plan.reason << ")\n";
+    if (plan.estimate && block.value("estimated", false)) {
+      if (plan.tolerance) {
+        out << "accuracy: tolerance " << percent(*plan.tolerance) << (block.value("met", false) ? " met" : " not met")
+            << " (largest estimate " << percent(block.value("error", 0.0)) << ")\n";
+      }
+      out << "accuracy: orders " << nlohmann::json(plan.orders).dump() << ", " << std::setprecision(3)
+          << block.value("estimate_s", 0.0) << " s for the other orders (" << std::setprecision(2)
+          << 100.0 * block.value("share", 0.0) << " % of the " << std::setprecision(3) << seconds_since(started)
+          << " s)\n";
+    }
+    if (inspect) inspect(*model, result);
   } catch (...) {
     try {
       if (folder) folder->finish("failed");

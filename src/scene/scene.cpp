@@ -358,10 +358,13 @@ Param build_parameters() {
                        "steady-state window change), reported in spectrum.json accuracy and on the terminal. crackle sweep "
                        "estimates each probe's peaks, the fold and period-doubling frequencies and the bilinear "
                        "frequency (mesh: the two lower orders; modes: twice the band; harmonics: H + 2) in sweep.json "
-                       "accuracy.", {
+                       "accuracy. crackle modal estimates every frequency of modal.json (mesh: the lower element orders from 2 on a "
+                       "box) in modal.json accuracy.", {
       choice("estimate", "auto: crackle run: on for the reduced model (its refinements cost a fraction of the run), "
                          "off for the full model (they would cost more than the run); crackle sweep: on with "
-                         "transient.model: auto (the route's own mesh), off for a mesh swept as written; on; off.",
+                         "transient.model: auto (the route's own mesh), off for a mesh swept as written; crackle "
+                         "modal: on at element order 3 or more on a box (the lower orders cost about a quarter of "
+                         "the solve), off below; on (crackle modal below order 3: the orders above, up to 4); off.",
              {"auto", "on", "off"})
           .defaults_to("auto"),
       number("tolerance", "Relative error to reach on accuracy.quantities at every probe: the run refines the "
@@ -936,8 +939,9 @@ Scene scene_from(const Values& values) {
   if (values.has("spectrum")) scene.spectrum = spectrum_from(values, scene);
   if (values.has("sweep")) scene.sweep = sweep_from(values, scene);
   if (values.has("accuracy")) {
-    if (!scene.spectrum && !scene.sweep) {
-      values.fail("accuracy", "a spectrum: or sweep: section (the accuracy estimates are of their signatures)", "none");
+    if (!scene.spectrum && !scene.sweep && !values.has("modal")) {
+      values.fail("accuracy", "a spectrum:, sweep: or modal: section (the accuracy estimates are of their signatures "
+                  "and frequencies)", "none");
     }
     scene.accuracy.estimate = values.word("accuracy.estimate");
     scene.accuracy.tolerance = optional_number(values, "accuracy.tolerance");

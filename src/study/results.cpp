@@ -153,6 +153,26 @@ json summarize_modal(const json& modal) {
     }
   }
   summary["pairs"] = pairs;
+  // The estimated relative errors of the frequencies (modal.json accuracy), where the solve had one.
+  const json accuracy = modal.is_object() ? modal.value("accuracy", json::object()) : json::object();
+  if (accuracy.is_object() && accuracy.value("estimated", false)) {
+    const auto errors = [](const json& estimates) {
+      json list = json::array();
+      if (!estimates.is_array()) return list;
+      for (const json& estimate : estimates) list.push_back(number_field(estimate, {"error"}));
+      return list;
+    };
+    const json estimated = accuracy.value("variants", json::object());
+    for (const char* name : {"uncracked", "open"}) {
+      if (estimated.is_object() && estimated.contains(name) && estimated[name].is_object())
+        summary[std::string(name) + "_error"] = errors(estimated[name].value("frequencies_hz", json::array()));
+    }
+    json bilinear = json::array();
+    const json estimated_pairs = accuracy.value("pairs", json::array());
+    for (const json& pair : estimated_pairs)
+      bilinear.push_back(pair.is_object() ? pair.value("f_bilinear_hz", json()) : json());
+    summary["bilinear_error"] = errors(bilinear);
+  }
   return summary;
 }
 
@@ -356,18 +376,36 @@ StudyTable build_table(const StudyPlan& plan, const std::vector<json>& cases) {
     if (k >= items.size()) return nullptr;
     return field ? items[k].value(field, json()) : items[k];
   };
+  // Error columns of the frequencies where any case's modal.json estimated them.
+  std::map<std::string, bool> modal_errors;
+  for (const json& c : cases) {
+    if (!c.is_object() || !c.contains("modal")) continue;
+    for (const char* list : {"uncracked_error", "open_error", "bilinear_error"})
+      modal_errors[list] = modal_errors[list] || c["modal"].contains(list);
+  }
+  const auto add_error = [&](const std::string& header, const char* list, std::size_t k) {
+    if (!modal_errors[list]) return;
+    kind = "error";
+    add(header + " error [-]", [=](const json& c) { return number_cell(modal_entry(c, list, k, nullptr)); });
+    kind = "frequency";
+  };
   for (std::size_t k = 0; k < std::max({n_uncracked, n_open, n_pairs}); ++k) {
     const std::string mode = std::to_string(k + 1);
     kind = "frequency";
-    if (k < n_uncracked)
+    if (k < n_uncracked) {
       add("f_uncracked_" + mode + " [Hz]",
           [=](const json& c) { return number_cell(modal_entry(c, "uncracked_hz", k, nullptr)); });
-    if (k < n_open)
+      add_error("f_uncracked_" + mode, "uncracked_error", k);
+    }
+    if (k < n_open) {
       add("f_open_" + mode + " [Hz]",
           [=](const json& c) { return number_cell(modal_entry(c, "open_hz", k, nullptr)); });
+      add_error("f_open_" + mode, "open_error", k);
+    }
     if (k < n_pairs) {
       add("f_bilinear_" + mode + " [Hz]",
           [=](const json& c) { return number_cell(modal_entry(c, "pairs", k, "bilinear_hz")); });
+      add_error("f_bilinear_" + mode, "bilinear_error", k);
       kind = "mac";
       add("mac_" + mode + " [-]",
           [=](const json& c) { return number_cell(modal_entry(c, "pairs", k, "mac")); });

@@ -23,6 +23,57 @@ TEST(ThreeLevel, ExactPowerLawGivesTheOrderAndTheTrueErrorTimesTheSafetyFactor) 
   }
 }
 
+// The same exact power law estimated at the coarse or middle level (a modal solve estimated by the
+// next element orders): the true error of that level times the safety factor; non-monotone levels
+// fall back to three times the change to the next level, not verified.
+TEST(ThreeLevel, AtACoarserLevelGivesThatLevelsTrueErrorTimesTheSafetyFactor) {
+  const double exact = 201.58, c = 0.9;
+  for (double p : {1.5, 3.0}) {
+    auto q = [&](double h) { return exact + c * std::pow(h, p); };
+    const double levels[] = {q(1.0), q(0.5), q(0.25)};
+    for (int run = 1; run <= 3; ++run) {
+      const Component component = three_level_at("mesh", levels[0], levels[1], levels[2], run, 2.0, 0.5, 8.0);
+      const double value = levels[run - 1];
+      EXPECT_DOUBLE_EQ(component.value, value);
+      EXPECT_TRUE(component.verified);
+      EXPECT_NEAR(component.observed_order, p, 1e-9);
+      EXPECT_NEAR(component.delta / ((exact - value) / value), kSafetyFactor, 1e-9) << "run " << run << ", p " << p;
+    }
+  }
+  const Component oscillating = three_level_at("mesh", 1.0, 1.2, 1.1, 1, 2.0, 0.5, 8.0);
+  EXPECT_FALSE(oscillating.verified);
+  EXPECT_NEAR(oscillating.delta, kCautiousSafetyFactor * 0.2, 1e-12);
+  EXPECT_NEAR(three_level_at("mesh", 1.0, 1.2, 1.1, 2, 2.0, 0.5, 8.0).delta, kCautiousSafetyFactor * -0.1 / 1.2, 1e-12);
+}
+
+// Unequal ratios (p-levels measured by DOFs^-1/3): Q = Q* + c h^p exactly gives back p and the true
+// error of the level that was run times the safety factor; equal ratios agree with three_level_at.
+TEST(ThreeLevel, UnequalRatiosGiveTheOrderAndTheTrueError) {
+  const double exact = 201.57, c = 3.0;
+  const double h[] = {std::pow(6000.0, -1.0 / 3), std::pow(28917.0, -1.0 / 3), std::pow(93096.0, -1.0 / 3)};
+  for (double p : {0.8, 2.0, 3.7}) {
+    auto q = [&](double size) { return exact + c * std::pow(size, p); };
+    for (int run = 1; run <= 3; ++run) {
+      const Component component = three_level_sizes("mesh", q(h[0]), q(h[1]), q(h[2]), h[0], h[1], h[2], run, 0.5, 15.0);
+      const double value = q(h[run - 1]);
+      EXPECT_TRUE(component.verified);
+      EXPECT_NEAR(component.observed_order, p, 1e-6);
+      EXPECT_NEAR(component.delta / ((exact - value) / value), kSafetyFactor, 1e-6) << "run " << run << ", p " << p;
+    }
+  }
+  auto q = [&](double size) { return exact + c * std::pow(size, 2.5); };
+  const Component equal = three_level_sizes("mesh", q(1.0), q(0.5), q(0.25), 1.0, 0.5, 0.25, 2, 0.5, 15.0);
+  const Component reference = three_level_at("mesh", q(1.0), q(0.5), q(0.25), 2, 2.0, 0.5, 15.0);
+  EXPECT_NEAR(equal.delta, reference.delta, 1e-9);
+  EXPECT_NEAR(equal.observed_order, reference.observed_order, 1e-6);
+  EXPECT_FALSE(three_level_sizes("mesh", 1.0, 1.2, 1.1, 1.0, 0.5, 0.25, 3, 0.5, 15.0).verified);
+  // The safety factor of levels that are not similar grids (p-levels on one grid).
+  const Component cautious = three_level_sizes("mesh", q(1.0), q(0.5), q(0.25), 1.0, 0.5, 0.25, 3, 0.5, 15.0,
+                                               kCautiousSafetyFactor);
+  EXPECT_TRUE(cautious.verified);
+  EXPECT_NEAR(cautious.delta / ((exact - q(0.25)) / q(0.25)), kCautiousSafetyFactor, 1e-6);
+}
+
 TEST(ThreeLevel, ARefinementThatDoesNotConvergeMonotonicallyIsNotVerified) {
   const Component oscillating = three_level("mesh", 1.0, 1.2, 1.1, 2.0, 0.5, 8.0);
   EXPECT_FALSE(oscillating.verified);
