@@ -115,9 +115,22 @@ int main(int argc, char** argv) {
     if (command == "modal" || (command == "run" && scene.has_modal_section)) {
       json variants = {{"uncracked", {{"frequencies_hz", uncracked}}}};
       if (scene.crack) variants["open"] = {{"frequencies_hz", open}};
-      crackle::io::write_json(
-          out / "modal.json",
-          {{"dofs", 123}, {"variants", variants}, {"pairs", scene.crack ? pairs : json::array()}});
+      json document = {{"dofs", 123}, {"variants", variants}, {"pairs", scene.crack ? pairs : json::array()}};
+      if (command == "modal") {
+        // crackle modal's accuracy block (issue 23): relative errors 1e-3 (k + 1) uncracked, 2e-3 (k + 1)
+        // open, 1.5e-3 (k + 1) bilinear at the place of each value.
+        const auto estimates = [&](double scale) {
+          json list = json::array();
+          for (std::size_t k = 0; k < uncracked.size(); ++k) list.push_back({{"error", scale * (k + 1)}});
+          return list;
+        };
+        json estimated = {{"uncracked", {{"frequencies_hz", estimates(1e-3)}}}};
+        if (scene.crack) estimated["open"] = {{"frequencies_hz", estimates(2e-3)}};
+        json estimated_pairs = json::array();
+        for (const json& bilinear : estimates(1.5e-3)) estimated_pairs.push_back({{"f_bilinear_hz", bilinear}});
+        document["accuracy"] = {{"estimated", true}, {"variants", estimated}, {"pairs", estimated_pairs}};
+      }
+      crackle::io::write_json(out / "modal.json", document);
     }
     if (command == "run") {
       const double excitation = 0.5 * pairs.at(0)["f_bilinear_hz"].get<double>();

@@ -146,6 +146,13 @@ int wait_exit_code(pid_t pid) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
+/// The index of study.csv's column `name` (a failure naming the header when it is missing).
+std::size_t column_of(const std::vector<std::string>& header, const std::string& name) {
+  const auto found = std::find(header.begin(), header.end(), name);
+  EXPECT_NE(found, header.end()) << name << " not in the header";
+  return static_cast<std::size_t>(found - header.begin());
+}
+
 int count_files(const fs::path& cases, const std::string& name) {
   int n = 0;
   std::error_code error;
@@ -173,19 +180,17 @@ TEST(StudyRun, SixCasesOneFailingAreAllTabulated) {
   const auto rows = lines_of(read(out / "study.csv"));
   ASSERT_EQ(rows.size(), 7u);
   const auto header = csv_fields(rows[0]);
-  const auto column = [&](const std::string& name) {
-    const auto found = std::find(header.begin(), header.end(), name);
-    EXPECT_NE(found, header.end()) << name << " in " << rows[0];
-    return static_cast<std::size_t>(found - header.begin());
-  };
+  const auto column = [&](const std::string& name) { return column_of(header, name); };
   for (const char* name :
        {"case", "crack.region.z [m]", "material.nu [-]", "status", "error", "f_uncracked_1 [Hz]", "f_open_1 [Hz]",
         "f_bilinear_1 [Hz]", "mac_1 [-]", "f_uncracked_3 [Hz]", "excitation [Hz]", "tip.A1/2 [m]", "tip.A1 [m]",
         "tip.A2 [m]", "tip.A3 [m]", "tip.A2/A1 [-]", "tip.A3/A1 [-]", "tip.A1/2/A1 [-]", "tip.beta [1/m]",
         "tip.A1 error [-]", "tip.A2/A1 error [-]"})
     column(name);
-  // Only the signatures the runs estimated get an error column.
+  // Only the signatures the runs estimated get an error column; crackle run's modal.json has no
+  // estimate of the frequencies.
   EXPECT_EQ(std::find(header.begin(), header.end(), "tip.A3/A1 error [-]"), header.end());
+  EXPECT_EQ(std::find(header.begin(), header.end(), "f_open_1 error [-]"), header.end());
   for (std::size_t i = 1; i < rows.size(); ++i) {
     const auto row = csv_fields(rows[i]);
     ASSERT_EQ(row.size(), header.size()) << rows[i];
@@ -407,6 +412,31 @@ TEST(StudyResults, UnpairedModesLeaveRatioAndBilinearFrequencyEmpty) {
   EXPECT_TRUE(summary["pairs"][1]["ratio"].is_null());
   EXPECT_EQ(summary["pairs"][1]["mac"], 0.08);  // the MAC says why
   EXPECT_FALSE(summary["pairs"][1]["paired"].get<bool>());
+  EXPECT_FALSE(summary.contains("open_error"));  // no accuracy block: no errors
+}
+
+// crackle modal's frequency estimates (modal.json accuracy) become error columns beside each
+// frequency; a study without them has none (SixCasesOneFailingAreAllTabulated).
+TEST(StudyRun, ModalCasesEstimatesAreErrorColumnsBesideTheirFrequencies) {
+  Workspace workspace("modal-errors",
+                      "study:\n"
+                      "  vary:\n"
+                      "    crack.region.z: [[0.008, 0.01], [0.006, 0.01]]\n"
+                      "  outputs: [modal]\n");
+  std::string log;
+  ASSERT_EQ(run_quietly(options_for(workspace, "out", 2), &log), 0) << log;
+  const auto rows = lines_of(read(workspace.root / "out" / "study.csv"));
+  ASSERT_EQ(rows.size(), 3u);
+  const auto header = csv_fields(rows[0]);
+  const auto column = [&](const std::string& name) { return column_of(header, name); };
+  // Each error column follows its frequency.
+  EXPECT_EQ(column("f_open_2 error [-]"), column("f_open_2 [Hz]") + 1);
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    const auto row = csv_fields(rows[i]);
+    EXPECT_DOUBLE_EQ(std::stod(row[column("f_uncracked_1 error [-]")]), 1e-3);
+    EXPECT_DOUBLE_EQ(std::stod(row[column("f_open_2 error [-]")]), 4e-3);
+    EXPECT_DOUBLE_EQ(std::stod(row[column("f_bilinear_3 error [-]")]), 4.5e-3);
+  }
 }
 
 TEST(StudyRun, FailedCaseRecordsItsErrorLineAndTheStudyExitsThree) {
