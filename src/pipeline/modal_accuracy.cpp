@@ -24,38 +24,6 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 /// grid twice as fine for 7 of 18 frequencies: effectivity 0.81-1.43; with 3: 1.9-3.4).
 constexpr double kSizeOrderMin = 0.5, kSizeOrderMax = 15.0;
 
-/// The mesh component of one quantity from its values at the plan's orders (NaN: that level lacks it)
-/// and the levels' DOFs.
-accuracy::Component mesh_from_levels(const ModalLevelPlan& plan, const std::vector<double>& values,
-                                     const std::vector<double>& dofs) {
-  const auto run = std::find(plan.orders.begin(), plan.orders.end(), plan.run_order) - plan.orders.begin();
-  const double value = values[run];
-  for (double level : values) {
-    if (!std::isfinite(level)) {
-      accuracy::Component component = missing_component("mesh", value);
-      component.reason = "a level lacks this frequency (its solve failed, or the mode pairs differently there)";
-      return component;
-    }
-  }
-  if (values.size() == 3) {
-    const auto size = [&](int k) { return std::cbrt(1.0 / dofs[k]); };
-    return accuracy::three_level_sizes("mesh", values[0], values[1], values[2], size(0), size(1), size(2),
-                                       static_cast<int>(run) + 1, kSizeOrderMin, kSizeOrderMax,
-                                       accuracy::kCautiousSafetyFactor);
-  }
-  // Two orders: the change between them, three times, and no rate to check it by.
-  accuracy::Component component;
-  component.name = "mesh";
-  component.value = value;
-  component.refined = values.back();
-  component.safety_factor = accuracy::kCautiousSafetyFactor;
-  component.delta = accuracy::kCautiousSafetyFactor * (values.back() - values.front()) / std::abs(value);
-  component.asymptotic = component.verified = false;
-  component.reason = "two levels (orders " + std::to_string(plan.orders.front()) + " and " +
-                     std::to_string(plan.orders.back()) + "): no observed rate";
-  return component;
-}
-
 /// `f_uncracked = 209.42 ± 0.0014 %, f_open = ... (mesh)`, with the distinct reasons of those not
 /// verified: the only component is the mesh.
 std::string short_line(const std::vector<std::pair<std::string, const accuracy::Estimate*>>& estimates) {
@@ -78,6 +46,41 @@ std::string short_line(const std::vector<std::pair<std::string, const accuracy::
 }
 
 }  // namespace
+
+accuracy::Component frequency_mesh_component(std::vector<int> orders, std::vector<double> values,
+                                             std::vector<double> dofs, int run_order) {
+  if (orders.size() == 3 && orders.front() == 1 && run_order != 1) {
+    orders.erase(orders.begin());
+    values.erase(values.begin());
+    dofs.erase(dofs.begin());
+  }
+  const auto run = std::find(orders.begin(), orders.end(), run_order) - orders.begin();
+  const double value = values[run];
+  for (std::size_t k = 0; k < values.size(); ++k) {
+    if (!std::isfinite(values[k]) || !(dofs[k] > 0.0)) {
+      accuracy::Component component = missing_component("mesh", value);
+      component.reason = "a level lacks this frequency (its solve failed, or the mode pairs differently there)";
+      return component;
+    }
+  }
+  if (values.size() == 3) {
+    const auto size = [&](int k) { return std::cbrt(1.0 / dofs[k]); };
+    return accuracy::three_level_sizes("mesh", values[0], values[1], values[2], size(0), size(1), size(2),
+                                       static_cast<int>(run) + 1, kSizeOrderMin, kSizeOrderMax,
+                                       accuracy::kCautiousSafetyFactor);
+  }
+  // Two orders: the change between them, three times, and no rate to check it by.
+  accuracy::Component component;
+  component.name = "mesh";
+  component.value = value;
+  component.refined = values.back();
+  component.safety_factor = accuracy::kCautiousSafetyFactor;
+  component.delta = accuracy::kCautiousSafetyFactor * (values.back() - values.front()) / std::abs(value);
+  component.asymptotic = component.verified = false;
+  component.reason = "two levels (orders " + std::to_string(orders.front()) + " and " +
+                     std::to_string(orders.back()) + "): no observed rate";
+  return component;
+}
 
 ModalLevelPlan modal_level_plan(const scene::Scene& scene, int ranks) {
   ModalLevelPlan plan;
@@ -150,7 +153,7 @@ ModalAccuracy modal_accuracy(const ModalLevelPlan& plan, const std::vector<Modal
       dofs.push_back(level ? static_cast<double>(level->dofs) : kNaN);
     }
     const double value = value_at(*run);
-    accuracy::Estimate estimate = accuracy::combine(quantity, value, {mesh_from_levels(plan, values, dofs)});
+    accuracy::Estimate estimate = accuracy::combine(quantity, value, {frequency_mesh_component(plan.orders, values, dofs, plan.run_order)});
     add_to_summary(estimate, summary);
     return estimate;
   };

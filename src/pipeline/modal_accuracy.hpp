@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "accuracy/estimate.hpp"
 #include "modal/modal.hpp"
 #include "scene/scene.hpp"
 
@@ -30,6 +31,13 @@ struct ModalLevelPlan {
 /// auto: on a box at order 3 or more (the levels are lower orders: about a quarter of the solve);
 /// on: also below, with the orders above (up to 4); off, a Gmsh mesh, or several ranks: none.
 ModalLevelPlan modal_level_plan(const scene::Scene& scene, int ranks);
+
+/// The mesh component of a frequency from its values and the free DOFs at consecutive element orders
+/// (ascending, `run_order` among them; NaN: a level lacks it): Richardson in DOFs^-1/3 with Fs = 3
+/// over three levels, three times the change over two; order 1 is dropped when it is not the order
+/// that ran (it locks in bending). `crackle modal`'s estimate and `crackle run`'s of its mode.
+accuracy::Component frequency_mesh_component(std::vector<int> orders, std::vector<double> values,
+                                             std::vector<double> dofs, int run_order);
 
 /// The frequencies of one solve that the estimate compares across orders.
 struct ModalLevel {

@@ -32,6 +32,7 @@ struct ProbeSignature {
 struct ModeSignature {
   int mode = 0;
   double f_uncracked = 0.0, f_open = 0.0, f_bilinear = 0.0;
+  double dofs = 0.0;  ///< free DOFs of the largest variant's eigenproblem (the mesh levels' size)
 };
 
 /// What one run computed.
