@@ -19,6 +19,7 @@
 #include "pipeline/sweep.hpp"
 #include "pipeline/limits.hpp"
 #include "core/errors.hpp"
+#include "core/mpi_session.hpp"
 #include "modal/eigensolver.hpp"
 #include "scene/scene.hpp"
 #include "scene/yaml_text.hpp"
@@ -137,23 +138,6 @@ std::string unexpected_argument(const CLI::App& command, const std::vector<std::
   return name + ": unexpected argument '" + rest.front() + "' (it takes one scene file); see " + name + " --help";
 }
 
-/// Ranks of the MPI launcher that started this process, from its environment (before PETSc starts):
-/// `crackle run` then starts PETSc at once and spreads its transient over the ranks.
-int mpi_world_size() {
-  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"}) {
-    const char* value = std::getenv(name);
-    if (value && *value) return std::atoi(value);
-  }
-  return 1;
-}
-
-int mpi_world_rank() {
-  for (const char* name : {"OMPI_COMM_WORLD_RANK", "PMI_RANK"}) {
-    const char* value = std::getenv(name);
-    if (value && *value) return std::atoi(value);
-  }
-  return 0;
-}
 
 /// PETSc's argv: the program name, then each `--petsc` value split at spaces, then what follows `--`.
 class PetscArguments {
@@ -397,7 +381,7 @@ int main(int argc, char** argv) {
       const bool options_given = !modal_petsc.empty() || !arguments.petsc.empty() ||
                                  (environment_options && *environment_options);
       modal::SlepcSession session(petsc.argc(), petsc.argv(),
-                                  options_given || mpi_world_size() > 1 ? modal::SlepcSession::Start::now
+                                  options_given || launcher_world_size() > 1 ? modal::SlepcSession::Start::now
                                                                         : modal::SlepcSession::Start::on_first_use);
       pipeline::run_modal_command(modal, modal_quiet ? discard : std::cout);
     }
@@ -411,9 +395,9 @@ int main(int argc, char** argv) {
       const char* environment_options = std::getenv("PETSC_OPTIONS");
       const bool options_given =
           !run_petsc.empty() || !arguments.petsc.empty() || (environment_options && *environment_options);
-      quiet_rank = mpi_world_size() > 1 && mpi_world_rank() != 0;
+      quiet_rank = launcher_world_size() > 1 && launcher_world_rank() != 0;
       modal::SlepcSession session(petsc.argc(), petsc.argv(),
-                                  options_given || mpi_world_size() > 1 ? modal::SlepcSession::Start::now
+                                  options_given || launcher_world_size() > 1 ? modal::SlepcSession::Start::now
                                                                         : modal::SlepcSession::Start::on_first_use);
       pipeline::run_run_command(run, std::cout);
     }

@@ -8,9 +8,20 @@
 /// whenever a study starts two cases at once, or a test runner two tests. A singleton whose
 /// OMPI_MCA_orte_tmpdir_base is its own folder has no one to race.
 #include <filesystem>
+#include <initializer_list>
 #include <optional>
 
 namespace crackle {
+
+/// The first of the environment variables `names` that holds a whole number, else `fallback`.
+int environment_integer(std::initializer_list<const char*> names, int fallback);
+
+/// The MPI launcher's view of this process, from its environment (readable before MPI or PETSc
+/// starts; Open MPI's and PMI's names): the ranks it started (1 without a launcher), this
+/// process's rank (0) and the ranks on this node (1).
+int launcher_world_size();
+int launcher_world_rank();
+int launcher_local_size();
 
 class MpiSessionFolder {
  public:

@@ -12,6 +12,7 @@
 
 #include "pipeline/commands.hpp"
 #include "core/errors.hpp"
+#include "core/mpi_session.hpp"
 #include "io/files.hpp"
 #include "pipeline/distributed_run.hpp"
 #include "pipeline/limits.hpp"
@@ -26,15 +27,8 @@ namespace crackle::pipeline {
 
 namespace {
 
-/// Processes of the MPI launcher that started this one (1 without one), from its environment: PETSc
-/// may not have started yet.
-int launched_ranks() {
-  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"}) {
-    const char* value = std::getenv(name);
-    if (value && *value) return std::max(1, std::atoi(value));
-  }
-  return run_ranks();
-}
+/// Processes of the MPI launcher that started this one (PETSc may not have started yet), else PETSc's.
+int launched_ranks() { return std::max(launcher_world_size(), run_ranks()); }
 
 /// PETSc options that speak to SLEPc's eigen-solve (-eps_*, -st_* and the KSP/PC of its spectral
 /// transformation), from the command line or PETSC_OPTIONS: a user who gives them wants SLEPc.

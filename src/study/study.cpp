@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
+#include "core/mpi_session.hpp"
 #include "io/files.hpp"
 #include "study/plan.hpp"
 #include "study/plot.hpp"
@@ -81,17 +82,6 @@ class DirectoryLock {
   int fd_ = -1;
 };
 
-int environment_integer(std::initializer_list<const char*> names, int fallback) {
-  for (const char* name : names) {
-    const char* value = std::getenv(name);
-    if (value && *value) {
-      char* end = nullptr;
-      const long number = std::strtol(value, &end, 10);
-      if (*end == '\0') return static_cast<int>(number);
-    }
-  }
-  return fallback;
-}
 
 std::string duration_text(double seconds) {
   const long total = std::lround(std::max(0.0, seconds));
@@ -203,12 +193,12 @@ class StudyRun {
 
 void StudyRun::detect_ranks() {
   n_ranks_ =
-      options_.n_ranks > 0 ? options_.n_ranks : environment_integer({"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"}, 1);
-  rank_ = options_.rank >= 0 ? options_.rank : environment_integer({"OMPI_COMM_WORLD_RANK", "PMI_RANK"}, 0);
+      options_.n_ranks > 0 ? options_.n_ranks : launcher_world_size();
+  rank_ = options_.rank >= 0 ? options_.rank : launcher_world_rank();
   if (n_ranks_ < 1 || rank_ < 0 || rank_ >= n_ranks_)
     throw InputError("study: rank " + std::to_string(rank_) + " of " + std::to_string(n_ranks_) +
                      " ranks is not valid");
-  const int on_node = std::max(1, environment_integer({"OMPI_COMM_WORLD_LOCAL_SIZE", "MPI_LOCALNRANKS"}, 1));
+  const int on_node = launcher_local_size();
   const int cores = std::max(1u, std::thread::hardware_concurrency());
   jobs_ = options_.jobs > 0 ? options_.jobs : std::max(1, cores / std::min(on_node, n_ranks_));
 }
