@@ -158,6 +158,25 @@ Component one_refinement(const std::string& name, double value, double refined, 
   return component;
 }
 
+Component checked_against(Component component, const std::string& check, double check_value) {
+  const double difference = relative(check_value - component.value, component.value);
+  if (!std::isfinite(difference) || !std::isfinite(component.delta)) return component;
+  component.check = check;
+  component.check_delta = difference;
+  component.levels_delta = component.delta;
+  const double levels = std::abs(component.delta);
+  if (std::abs(difference) > levels) {
+    component.delta = std::copysign(difference, component.delta != 0.0 ? component.delta : difference);
+  }
+  if (component.verified && std::abs(difference) > kCheckRefutes * levels) {
+    component.verified = component.asymptotic = false;
+    component.reason = check + " differs by " + number(100.0 * std::abs(difference), 3) + " %, more than " +
+                       number(kCheckRefutes, 2) + " times the levels' estimate (" + number(100.0 * levels, 3) +
+                       " %): the levels are not in the asymptotic range";
+  }
+  return component;
+}
+
 Component residue(const std::string& name, double value, double relative_residue) {
   Component component;
   component.name = name;

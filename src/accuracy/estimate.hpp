@@ -25,6 +25,9 @@ struct Component {
   bool asymptotic = true;     ///< the levels look asymptotic (three levels: order in range)
   bool verified = true;       ///< false: the estimate cannot be trusted (see reason)
   std::string reason;         ///< why not verified or not asymptotic
+  std::string check;          ///< an independent discretisation it was checked against (checked_against); empty: none
+  double check_delta = 0.0;   ///< (Q_check - value) / |value|
+  double levels_delta = 0.0;  ///< delta before the check (the levels' own estimate)
 };
 
 /// Three levels of a refinement with constant ratio r (coarse Q1, Q2, fine Q3 = the value that was
@@ -52,6 +55,19 @@ Component three_level_at(const std::string& name, double q1, double q2, double q
 Component three_level_sizes(const std::string& name, double q1, double q2, double q3, double h1, double h2,
                             double h3, int run, double order_min, double order_max,
                             double safety_factor = kSafetyFactor);
+
+/// Ratio of the difference to an independent discretisation over the levels' estimate above which
+/// the levels' asymptotic claim is refuted (checked_against).
+inline constexpr double kCheckRefutes = 2.0;
+
+/// A component checked against an independent discretisation of the same quantity, of another family
+/// of refinements than the levels' (order 2 on cells x 2 beside p-levels on one grid). p-levels on a
+/// coarse grid can look asymptotic while the crack front is under-resolved (docs/benchmarks.md 11.9:
+/// effectivity 0.23 on 25 mm cells); the other family tells. The estimate then covers the difference
+/// to `check_value` (it never claims the run closer to the truth than to an independent solution; the
+/// sign stays the levels'), and a difference above kCheckRefutes times the levels' estimate refutes
+/// their asymptotic claim: not verified. A check without a finite value changes nothing.
+Component checked_against(Component component, const std::string& check, double check_value);
 
 /// One refinement from the setting that was run (value) to a finer one (refined) whose error is
 /// expected to fall as refinement^-order: the error of `value` is (refined - value) r^p / (r^p - 1).

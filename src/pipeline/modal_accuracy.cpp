@@ -111,6 +111,9 @@ ModalLevelPlan modal_level_plan(const scene::Scene& scene, int ranks) {
                   "this solve)";
     return plan;
   }
+  if (plan.orders.size() == 3 && plan.orders.back() == order && plan.orders.front() == kCheckOrder) {
+    plan.check_cells = {2 * scene.box.cells[0], 2 * scene.box.cells[1], 2 * scene.box.cells[2]};
+  }
   plan.estimate = true;
   return plan;
 }
@@ -137,8 +140,14 @@ ModalAccuracy modal_accuracy(const ModalLevelPlan& plan, const std::vector<Modal
   // The levels by order, in the plan's order (a missing one: every value NaN).
   std::vector<const ModalLevel*> at;
   const ModalLevel* run = nullptr;
+  const auto check_found = std::find_if(levels.begin(), levels.end(), [](const ModalLevel& l) { return l.check; });
+  const ModalLevel* check = check_found == levels.end() ? nullptr : &*check_found;
+  const std::string check_name =
+      plan.check_cells ? "order " + std::to_string(kCheckOrder) + " on cells " + nlohmann::json(*plan.check_cells).dump()
+                       : std::string();
   for (int order : plan.orders) {
-    const auto found = std::find_if(levels.begin(), levels.end(), [&](const ModalLevel& l) { return l.order == order; });
+    const auto found = std::find_if(levels.begin(), levels.end(),
+                                    [&](const ModalLevel& l) { return l.order == order && !l.check; });
     at.push_back(found == levels.end() ? nullptr : &*found);
     if (order == plan.run_order) run = at.back();
   }
@@ -153,7 +162,9 @@ ModalAccuracy modal_accuracy(const ModalLevelPlan& plan, const std::vector<Modal
       dofs.push_back(level ? static_cast<double>(level->dofs) : kNaN);
     }
     const double value = value_at(*run);
-    accuracy::Estimate estimate = accuracy::combine(quantity, value, {frequency_mesh_component(plan.orders, values, dofs, plan.run_order)});
+    accuracy::Component mesh = frequency_mesh_component(plan.orders, values, dofs, plan.run_order);
+    if (check) mesh = accuracy::checked_against(mesh, check_name, value_at(*check));
+    accuracy::Estimate estimate = accuracy::combine(quantity, value, {mesh});
     add_to_summary(estimate, summary);
     return estimate;
   };
@@ -217,6 +228,10 @@ ModalAccuracy modal_accuracy(const ModalLevelPlan& plan, const std::vector<Modal
   nlohmann::json runs = nlohmann::json::array();
   for (const ModalLevel* level : at) {
     if (level) runs.push_back({{"order", level->order}, {"dofs", level->dofs}, {"wall_s", level->wall_s}});
+  }
+  if (check) {
+    runs.push_back({{"order", check->order}, {"cells", *plan.check_cells}, {"check", true}, {"dofs", check->dofs},
+                    {"wall_s", check->wall_s}});
   }
   out.block = accuracy_summary("p" + std::to_string(plan.run_order), plan.tolerance,
                                {"f_uncracked", "f_open", "f_bilinear"}, 0.0, summary, outcome, runs, run->wall_s,

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <iomanip>
 #include <memory>
@@ -119,6 +120,27 @@ void run_modal_command(const ModalCommandOptions& options, std::ostream& out, co
         auto [level_model, level_result, level_s] = solve(level_scene);
         levels.push_back(modal_level(level_result, order, level_s));
       }
+      if (plan.check_cells) {
+        // The check level: order 2 on the cells doubled, about the run's DOFs (its memory is checked).
+        const std::array<int, 3>& cells = *plan.check_cells;
+        std::vector<scene::Override> at_check = overrides;
+        at_check.push_back({"mesh.box.order", std::to_string(kCheckOrder)});
+        at_check.push_back({"mesh.box.cells", "[" + std::to_string(cells[0]) + ", " + std::to_string(cells[1]) + ", " +
+                                                  std::to_string(cells[2]) + "]"});
+        const scene::Scene check_scene = scene::load_scene(options.scene_path, at_check);
+        bool fits = true;
+        try {
+          check_memory(check_scene, matrices::eigen_solve, MeshUse::modal);
+        } catch (const Error& refused) {
+          lacking += std::string(lacking.empty() ? "" : "; ") + "the check level: " + refused.what();
+          fits = false;
+        }
+        if (fits) {
+          auto [check_model, check_result, check_s] = solve(check_scene);
+          levels.push_back(modal_level(check_result, kCheckOrder, check_s));
+          levels.back().check = true;
+        }
+      }
       const double estimate_s = seconds_since(estimate_started);
       const ModalAccuracy accuracy = modal_accuracy(plan, levels, estimate_s, seconds_since(started));
       block = accuracy.block;
@@ -136,8 +158,9 @@ void run_modal_command(const ModalCommandOptions& options, std::ostream& out, co
         out << "accuracy: tolerance " << percent(*plan.tolerance) << (block.value("met", false) ? " met" : " not met")
             << " (largest estimate " << percent(block.value("error", 0.0)) << ")\n";
       }
-      out << "accuracy: orders " << nlohmann::json(plan.orders).dump() << ", " << std::setprecision(3)
-          << block.value("estimate_s", 0.0) << " s for the other orders (" << std::setprecision(2)
+      out << "accuracy: orders " << nlohmann::json(plan.orders).dump()
+          << (plan.check_cells ? ", checked by order 2 on cells " + nlohmann::json(*plan.check_cells).dump() : "")
+          << ", " << std::setprecision(3) << block.value("estimate_s", 0.0) << " s for the other levels (" << std::setprecision(2)
           << 100.0 * block.value("share", 0.0) << " % of the " << std::setprecision(3) << seconds_since(started)
           << " s)\n";
     }

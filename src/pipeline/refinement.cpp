@@ -231,6 +231,9 @@ nlohmann::json component_json(const accuracy::Component& component) {
     json["observed_rate"] = component.observed_order;
   }
   if (!component.reason.empty()) json["reason"] = component.reason;
+  if (!component.check.empty()) json["check"] = {{"level", component.check},
+                     {"delta", component.check_delta},
+                     {"levels_delta", component.levels_delta}};
   return json;
 }
 

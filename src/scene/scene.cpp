@@ -359,7 +359,7 @@ Param build_parameters() {
                        "estimates each probe's peaks, the fold and period-doubling frequencies and the bilinear "
                        "frequency (mesh: the two lower orders; modes: twice the band; harmonics: H + 2) in sweep.json "
                        "accuracy. crackle modal estimates every frequency of modal.json (mesh: the lower element orders from 2 on a "
-                       "box) in modal.json accuracy.", {
+                       "box, at order 4 checked by order 2 on the cells doubled) in modal.json accuracy.", {
       choice("estimate", "auto: crackle run: on for the reduced model (its refinements cost a fraction of the run), "
                          "off for the full model (they would cost more than the run); crackle sweep: on with "
                          "transient.model: auto (the route's own mesh), off for a mesh swept as written; crackle "

@@ -108,6 +108,40 @@ TEST(ThreeLevel, AnOrderFarOutsideItsRangeIsNotVerifiedAndSlightlyOutsideIsCauti
   EXPECT_FALSE(far.verified);
 }
 
+// An independent discretisation (order 2 on cells x 2 beside p-levels): within the levels' estimate
+// it changes nothing; beyond it the estimate grows to the difference with the levels' sign; beyond
+// twice it the levels are refuted (not verified, with the reason); no value: no check.
+TEST(CheckedAgainst, TheEstimateCoversTheDifferenceAndTwiceItRefutesTheLevels) {
+  const double exact = 201.57, c = 3.0;
+  const double h[] = {std::pow(6000.0, -1.0 / 3), std::pow(28917.0, -1.0 / 3), std::pow(93096.0, -1.0 / 3)};
+  auto q = [&](double size) { return exact + c * std::pow(size, 2.0); };
+  const Component levels = three_level_sizes("mesh", q(h[0]), q(h[1]), q(h[2]), h[0], h[1], h[2], 3, 0.5, 15.0, 3.0);
+  ASSERT_TRUE(levels.verified);
+  ASSERT_LT(levels.delta, 0.0);  // the value is above the truth
+  const double value = levels.value, estimate = std::abs(levels.delta);
+
+  const Component within = checked_against(levels, "order 2 on cells x 2", value * (1.0 + 0.5 * estimate));
+  EXPECT_EQ(within.delta, levels.delta);
+  EXPECT_TRUE(within.verified);
+  EXPECT_EQ(within.check, "order 2 on cells x 2");
+  EXPECT_NEAR(within.check_delta, 0.5 * estimate, 1e-12);
+
+  const Component beyond = checked_against(levels, "order 2 on cells x 2", value * (1.0 + 1.5 * estimate));
+  EXPECT_NEAR(beyond.delta, -1.5 * estimate, 1e-12);  // the levels' sign, the difference's size
+  EXPECT_EQ(beyond.levels_delta, levels.delta);
+  EXPECT_TRUE(beyond.verified);
+
+  const Component refuted = checked_against(levels, "order 2 on cells x 2", value * (1.0 - 2.5 * estimate));
+  EXPECT_NEAR(refuted.delta, -2.5 * estimate, 1e-12);
+  EXPECT_FALSE(refuted.verified);
+  EXPECT_FALSE(refuted.asymptotic);
+  EXPECT_NE(refuted.reason.find("order 2 on cells x 2 differs by"), std::string::npos) << refuted.reason;
+
+  const Component unchecked = checked_against(levels, "order 2 on cells x 2", std::nan(""));
+  EXPECT_EQ(unchecked.delta, levels.delta);
+  EXPECT_TRUE(unchecked.check.empty());
+}
+
 TEST(OneRefinement, KnownOrderGivesTheErrorOfTheCoarserSetting) {
   // Newmark: Q(n) = Q* + c / n^2; n against 2n.
   const double exact = 2.0, c = 5.0;

@@ -3,6 +3,7 @@
 // same body at the highest order, extrapolated by its own levels (the reference).
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -39,6 +40,11 @@ TEST(ModalAccuracy, TheLevelsAreTheLowerOrdersFromTwoOrWhenAskedTheOrdersAbove) 
   EXPECT_EQ(plan(4).orders, (std::vector<int>{2, 3, 4}));
   EXPECT_EQ(plan(3).orders, (std::vector<int>{2, 3}));  // order 1 is no level: it locks in bending
   EXPECT_EQ(plan(4).run_order, 4);
+  // Three lower orders are checked by order 2 on the cells doubled; two levels, or levels above, not.
+  ASSERT_TRUE(plan(4).check_cells.has_value());
+  EXPECT_EQ(*plan(4).check_cells, (std::array<int, 3>{16, 4, 2}));
+  EXPECT_FALSE(plan(3).check_cells.has_value());
+  EXPECT_FALSE(plan(2, "accuracy: {estimate: on}\n").check_cells.has_value());
   // Below order 3 only when asked: the orders above, up to the highest.
   EXPECT_FALSE(plan(2).estimate);
   EXPECT_NE(plan(2).reason.find("accuracy.estimate: on"), std::string::npos) << plan(2).reason;
@@ -63,32 +69,62 @@ nlohmann::json solve(const fs::path& directory, const std::string& scene) {
   return nlohmann::json::parse(file);
 }
 
-// The coarse grid at order 4 (levels 2, 3, 4) against the grid twice as fine in each direction at
-// order 4, extrapolated by its own levels (the reference): the estimate holds the true error of every
-// frequency, and overstates that of the bilinear frequencies at most 3 times (DETECTION.md's test of
-// effectivity). Measured: 2.04-3.34 (docs/benchmarks.md 11.9; a grid half as fine again, 4 x 2 x 1
-// cells, is a miss there: 0.23-5.6).
-TEST(ModalAccuracy, ACoarseGridsEstimateHoldsItsErrorAgainstAFinerGrid) {
-  const fs::path directory = fs::temp_directory_path() / ("crackle-modal-effectivity-" + std::to_string(::getpid()));
-  const nlohmann::json fine = solve(directory / "fine", beam_scene("[16, 4, 2]", 4));
-  const nlohmann::json coarse = solve(directory / "coarse", beam_scene("[8, 2, 1]", 4));
-  ASSERT_TRUE(fine["accuracy"]["estimated"].get<bool>()) << fine["accuracy"].dump();
+// The effectivity of every frequency of a coarse grid at order 4 (levels 2, 3, 4 and the check level)
+// against the grid twice as fine in each direction at order 4, extrapolated by its own levels (the
+// reference), with whether it was verified.
+struct Effectivity {
+  std::string field;
+  std::size_t mode = 0;
+  double effectivity = 0.0;
+  bool verified = false;
+  std::string where;
+};
+std::vector<Effectivity> effectivities(const std::string& name, const std::string& coarse_cells,
+                                       const std::string& fine_cells) {
+  const fs::path directory =
+      fs::temp_directory_path() / ("crackle-modal-effectivity-" + name + "-" + std::to_string(::getpid()));
+  const nlohmann::json fine = solve(directory / "fine", beam_scene(fine_cells, 4));
+  const nlohmann::json coarse = solve(directory / "coarse", beam_scene(coarse_cells, 4));
+  fs::remove_all(directory);
+  EXPECT_TRUE(fine["accuracy"]["estimated"].get<bool>()) << fine["accuracy"].dump();
+  std::vector<Effectivity> out;
   for (const char* field : {"f_uncracked_hz", "f_open_hz", "f_bilinear_hz"}) {
     for (std::size_t mode = 0; mode < 3; ++mode) {
       const nlohmann::json& reference = fine["accuracy"]["pairs"][mode][field];
       const nlohmann::json& mesh = reference["components"]["mesh"];
-      const double truth = reference["value"].get<double>() *
-                           (1.0 + mesh["delta"].get<double>() / mesh["safety_factor"].get<double>());
+      // The reference's own levels extrapolated (its check level, if any, only widens its estimate).
+      const double delta = (mesh.contains("check") ? mesh["check"]["levels_delta"] : mesh["delta"]).get<double>();
+      const double truth = reference["value"].get<double>() * (1.0 + delta / mesh["safety_factor"].get<double>());
       const nlohmann::json& estimate = coarse["accuracy"]["pairs"][mode][field];
       const double value = estimate["value"].get<double>();
-      const double effectivity = estimate["error"].get<double>() / (std::abs(truth - value) / value);
-      const std::string where = std::string(field) + " mode " + std::to_string(mode + 1) + ": " + estimate.dump();
-      if (!estimate["verified"].get<bool>()) continue;
-      EXPECT_GE(effectivity, 1.0) << where;
-      if (std::string(field) == "f_bilinear_hz") EXPECT_LE(effectivity, 3.0) << where;
+      out.push_back({field, mode, estimate["error"].get<double>() / (std::abs(truth - value) / value),
+                     estimate["verified"].get<bool>(),
+                     std::string(field) + " mode " + std::to_string(mode + 1) + ": " + estimate.dump()});
     }
   }
-  fs::remove_all(directory);
+  return out;
+}
+
+// 12.5 mm cells: the estimate holds the true error of every frequency, and overstates that of the
+// bilinear frequencies at most 3 times (DETECTION.md's test of effectivity). Measured: 2.04-3.51
+// (docs/benchmarks.md 11.9).
+TEST(ModalAccuracy, ACoarseGridsEstimateHoldsItsErrorAgainstAFinerGrid) {
+  for (const Effectivity& e : effectivities("8x2x1", "[8, 2, 1]", "[16, 4, 2]")) {
+    if (!e.verified) continue;
+    EXPECT_GE(e.effectivity, 1.0) << e.where;
+    if (e.field == "f_bilinear_hz") EXPECT_LE(e.effectivity, 3.0) << e.where;
+  }
+}
+
+// 25 mm cells, one through the thickness: the three p-levels look asymptotic and are not (without the
+// check level the third mode's estimate was 0.23 of its error). The check level (order 2 on cells x 2)
+// disagrees with them: every estimate covers its error, and the third mode is not verified. Measured:
+// 1.61-5.62; f_bilinear 1 verified at 3.29 (over the [1, 3] of DETECTION.md: an overestimate).
+TEST(ModalAccuracy, AGridTooCoarseForItsLevelsIsCaughtByTheCheckLevel) {
+  for (const Effectivity& e : effectivities("4x2x1", "[4, 2, 1]", "[8, 4, 2]")) {
+    EXPECT_GE(e.effectivity, 1.0) << e.where;
+    if (e.mode == 2) EXPECT_FALSE(e.verified) << e.where;
+  }
 }
 
 // modal.json carries an estimate of every frequency at the place of its value, modes.csv its error
@@ -105,7 +141,11 @@ TEST(ModalAccuracy, ModalJsonCarriesAnEstimateOfEveryFrequencyAndTwoLevelsAreNot
   const nlohmann::json& accuracy = p4["accuracy"];
   ASSERT_TRUE(accuracy["estimated"].get<bool>()) << accuracy.dump();
   EXPECT_EQ(accuracy["orders"], nlohmann::json({2, 3, 4}));
-  EXPECT_EQ(accuracy["runs"].size(), 3u);
+  ASSERT_EQ(accuracy["runs"].size(), 4u);  // orders 2, 3, 4 and the check level
+  EXPECT_EQ(accuracy["runs"][3]["order"], 2);
+  EXPECT_EQ(accuracy["runs"][3]["cells"], nlohmann::json({8, 4, 2}));
+  EXPECT_TRUE(accuracy["runs"][3]["check"].get<bool>());
+  EXPECT_EQ(accuracy["pairs"][0]["f_open_hz"]["components"]["mesh"]["check"]["level"], "order 2 on cells [8,4,2]");
   for (const char* variant : {"uncracked", "open"}) {
     const nlohmann::json& values = p4["variants"][variant]["frequencies_hz"];
     const nlohmann::json& estimates = accuracy["variants"][variant]["frequencies_hz"];
