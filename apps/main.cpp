@@ -170,6 +170,18 @@ int bad_command_line(const std::string& message) {
   return kExitBadInput;
 }
 
+/// When a command's PETSc starts: at its first SLEPc solve (a cached or ARPACK run never pays MPI's
+/// start-up), or at once when PETSc options are given (--petsc, after `--`, or PETSC_OPTIONS: so that
+/// they are read and checked) or under mpirun -np N > 1 (the ranks share the run).
+modal::SlepcSession::Start slepc_start(const std::vector<std::string>& command_options,
+                                       const std::vector<std::string>& separated_options) {
+  const char* environment_options = std::getenv("PETSC_OPTIONS");
+  const bool given =
+      !command_options.empty() || !separated_options.empty() || (environment_options && *environment_options);
+  return given || launcher_world_size() > 1 ? modal::SlepcSession::Start::now
+                                            : modal::SlepcSession::Start::on_first_use;
+}
+
 }  // namespace
 
 /// Runs crackle again with glibc's malloc asking for transparent huge pages (GLIBC_TUNABLES
@@ -374,31 +386,18 @@ int main(int argc, char** argv) {
     if (*check_command) pipeline::run_check(check, check_quiet ? discard : std::cout);
     if (*modal_command) {
       PetscArguments petsc(arguments.own.front(), modal_petsc, arguments.petsc);
-      // As for run: PETSc starts at the first SLEPc solve (an ARPACK solve, modal.solver: auto on one
-      // process, never pays MPI's start-up: a third of an identify forward run); at once under mpirun
-      // and with PETSc options, so that they are read, checked and make auto choose SLEPc.
-      const char* environment_options = std::getenv("PETSC_OPTIONS");
-      const bool options_given = !modal_petsc.empty() || !arguments.petsc.empty() ||
-                                 (environment_options && *environment_options);
-      modal::SlepcSession session(petsc.argc(), petsc.argv(),
-                                  options_given || launcher_world_size() > 1 ? modal::SlepcSession::Start::now
-                                                                        : modal::SlepcSession::Start::on_first_use);
+      // As for run: an ARPACK solve (modal.solver: auto on one process) never pays MPI's start-up, a
+      // third of an identify forward run; PETSc options make auto choose SLEPc.
+      modal::SlepcSession session(petsc.argc(), petsc.argv(), slepc_start(modal_petsc, arguments.petsc));
       pipeline::run_modal_command(modal, modal_quiet ? discard : std::cout);
     }
     if (*run_command) {
       run.progress = !quiet;
       PetscArguments petsc(arguments.own.front(), run_petsc, arguments.petsc);
-      // PETSc starts when the modal stage first solves with SLEPc (a cached or ARPACK run never
-      // pays MPI's start-up); given PETSc options, at once, so that they are read and checked; under
-      // mpirun -np N > 1 at once: the ranks share one transient (rank 0 writes and prints, errors
-      // are agreed, so every rank exits with the same code and only rank 0 says why).
-      const char* environment_options = std::getenv("PETSC_OPTIONS");
-      const bool options_given =
-          !run_petsc.empty() || !arguments.petsc.empty() || (environment_options && *environment_options);
+      // Under mpirun -np N > 1 the ranks share one transient (rank 0 writes and prints, errors are
+      // agreed, so every rank exits with the same code and only rank 0 says why).
       quiet_rank = launcher_world_size() > 1 && launcher_world_rank() != 0;
-      modal::SlepcSession session(petsc.argc(), petsc.argv(),
-                                  options_given || launcher_world_size() > 1 ? modal::SlepcSession::Start::now
-                                                                        : modal::SlepcSession::Start::on_first_use);
+      modal::SlepcSession session(petsc.argc(), petsc.argv(), slepc_start(run_petsc, arguments.petsc));
       pipeline::run_run_command(run, std::cout);
     }
     if (*sweep_command) {

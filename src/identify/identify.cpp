@@ -187,17 +187,13 @@ class Forward {
       if (key == "transient.damping.at" || key == "transient.damping.at.hz") damping.at_hz = value;
     }
     const double f_hz = pair.value("paired", true) ? pair["f_bilinear_hz"].get<double>() : pair["f_uncracked_hz"].get<double>();
-    transient::RayleighDamping rayleigh{damping.alpha, damping.beta};
-    if (damping.ratio) {
-      double at_hz = damping.at_hz.value_or(kNaN);
-      if (!damping.at_hz) {
-        if (damping.at_mode < 1 || static_cast<std::size_t>(damping.at_mode) > pairs.size()) return kNaN;
-        at_hz = pairs[static_cast<std::size_t>(damping.at_mode - 1)]["f_uncracked_hz"].get<double>();
-      }
-      const double omega_at = 2.0 * M_PI * at_hz;
-      rayleigh = damping.type == "stiffness" ? transient::stiffness_proportional_damping(*damping.ratio, omega_at)
-                                             : transient::mass_proportional_damping(*damping.ratio, omega_at);
+    double at_hz = damping.at_hz.value_or(kNaN);
+    if (damping.ratio && !damping.at_hz) {
+      if (damping.at_mode < 1 || static_cast<std::size_t>(damping.at_mode) > pairs.size()) return kNaN;
+      at_hz = pairs[static_cast<std::size_t>(damping.at_mode - 1)]["f_uncracked_hz"].get<double>();
     }
+    const transient::RayleighDamping rayleigh = transient::stated_damping(
+        damping.ratio, damping.type == "stiffness", at_hz, damping.alpha, damping.beta);
     return transient::damping_ratio(rayleigh, 2.0 * M_PI * f_hz);
   }
 

@@ -171,6 +171,11 @@ modal::StiffnessFactors& Model::factors() const {
   return *factors_;
 }
 
+mesh::Variant transient_variant(const scene::Scene& scene, const Model& model) {
+  const bool open = scene.transient && scene.transient->variant == "open" && model.mesh.has_crack();
+  return open ? mesh::Variant::open : mesh::Variant::uncracked;
+}
+
 Model build_model(const scene::Scene& scene, MeshUse use) {
   check_memory(scene, matrices::none, use);
   Model model;

@@ -56,6 +56,10 @@ struct Model {
 /// The crack contact of the scene's `crack.contact` (and the crack's gap g0).
 contact::ContactOptions scene_contact_options(const scene::Scene& scene);
 
+/// The variant the transient (and the reduced model built for it) runs on: open where
+/// transient.variant says so and the mesh has a crack, else uncracked.
+mesh::Variant transient_variant(const scene::Scene& scene, const Model& model);
+
 /// What a model is built for: `mesh.box.grading: auto` grades the box mesh towards the crack front
 /// for modal analysis and leaves it uniform for `crackle run` and `crackle sweep`: the full
 /// explicit transient's stable step would pay the smallest cell, and the reduced transient and the

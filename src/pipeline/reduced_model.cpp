@@ -121,8 +121,8 @@ ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, 
   if (!scene.transient) throw InputError(scene.file + ": transient: expected a section for the reduced model");
   Stopwatch clock;
   const scene::TransientSection& section = *scene.transient;
-  const bool with_crack = section.variant == "open" && model.mesh.has_crack();
-  const fem::System& system = *model.system(with_crack ? mesh::Variant::open : mesh::Variant::uncracked);
+  const bool with_crack = transient_variant(scene, model) == mesh::Variant::open;
+  const fem::System& system = *model.system(transient_variant(scene, model));
   const contact::ContactOptions contact_options = scene_contact_options(scene);
   const bool friction = with_crack && scene.contact.model != "none" && contact_options.friction_coefficient > 0.0;
 

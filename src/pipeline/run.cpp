@@ -171,13 +171,11 @@ transient::ExternalLoad excitation_load(const scene::Scene& scene, const Model& 
 /// Rayleigh damping from a ratio at a frequency (or a mode), or from alpha and beta.
 transient::RayleighDamping scene_damping(const scene::Scene& scene, const std::optional<modal::ModalResult>& modes) {
   const scene::DampingSection& damping = scene.transient->damping;
-  if (!damping.ratio) return {damping.alpha, damping.beta};
-  const double at_hz = damping.at_hz ? *damping.at_hz
-                                     : mode_frequency(*modes, damping.at_mode, "uncracked",
-                                                      scene.file + ": transient.damping.at.mode");
-  const double omega = 2.0 * M_PI * at_hz;
-  return damping.type == "stiffness" ? transient::stiffness_proportional_damping(*damping.ratio, omega)
-                                     : transient::mass_proportional_damping(*damping.ratio, omega);
+  const double at_hz = !damping.ratio ? 0.0
+                       : damping.at_hz ? *damping.at_hz
+                                       : mode_frequency(*modes, damping.at_mode, "uncracked",
+                                                        scene.file + ": transient.damping.at.mode");
+  return transient::stated_damping(damping.ratio, damping.type == "stiffness", at_hz, damping.alpha, damping.beta);
 }
 
 namespace {
@@ -981,8 +979,7 @@ std::optional<modal::ModalResult> run_modal_stage(const scene::Scene& scene, con
   // The reduced model solves with the transient variant's K again: its factor is kept.
   if (reduced_follows) {
     modal_settings.factors = &model.factors();
-    modal_settings.factors_variant =
-        section.variant == "open" && model.mesh.has_crack() ? mesh::Variant::open : mesh::Variant::uncracked;
+    modal_settings.factors_variant = transient_variant(scene, model);  // the reduced model's system
   }
   modal::ModalResult modes = modal::run_modal(
       [&model](mesh::Variant variant) -> const fem::System& { return *model.system(variant); }, modal_settings);

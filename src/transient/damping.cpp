@@ -26,6 +26,12 @@ RayleighDamping stiffness_proportional_damping(double ratio, double omega) {
   return {0.0, 2.0 * ratio / omega};
 }
 
+RayleighDamping stated_damping(std::optional<double> ratio, bool stiffness, double at_hz, double alpha, double beta) {
+  if (!ratio) return {alpha, beta};
+  const double omega = 2.0 * M_PI * at_hz;
+  return stiffness ? stiffness_proportional_damping(*ratio, omega) : mass_proportional_damping(*ratio, omega);
+}
+
 double damping_ratio(const RayleighDamping& damping, double omega) {
   return damping.alpha / (2.0 * omega) + 0.5 * damping.beta * omega;
 }

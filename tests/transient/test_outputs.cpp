@@ -51,6 +51,13 @@ TEST(Damping, RayleighHelpers) {
   EXPECT_DOUBLE_EQ(damping_ratio(stiffness, 1000.0), 0.02);
   EXPECT_DOUBLE_EQ(damping_ratio(mass, 2000.0), 0.01);  // mass-proportional: falls as 1/omega
   EXPECT_THROW(mass_proportional_damping(-0.1, 1.0), InputError);
+  // As a scene states it: a ratio at a frequency in Hz (mass or stiffness), else alpha and beta.
+  const double at_hz = 1000.0 / (2.0 * M_PI);
+  EXPECT_DOUBLE_EQ(stated_damping(0.02, false, at_hz, 7.0, 8.0).alpha, 40.0);
+  EXPECT_DOUBLE_EQ(stated_damping(0.02, false, at_hz, 7.0, 8.0).beta, 0.0);
+  EXPECT_DOUBLE_EQ(stated_damping(0.02, true, at_hz, 7.0, 8.0).beta, 4e-5);
+  EXPECT_DOUBLE_EQ(stated_damping(std::nullopt, true, at_hz, 7.0, 8.0).alpha, 7.0);
+  EXPECT_DOUBLE_EQ(stated_damping(std::nullopt, true, at_hz, 7.0, 8.0).beta, 8.0);
 }
 
 mesh::Mesh free_block() {
