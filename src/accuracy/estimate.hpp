@@ -13,6 +13,12 @@ namespace crackle::accuracy {
 inline constexpr double kSafetyFactor = 1.25;
 inline constexpr double kCautiousSafetyFactor = 3.0;
 
+/// Element-order levels read geometrically (the order raised by one per level, the ratio e): the
+/// observed "order" is the rate ln((Q1 - Q2)/(Q2 - Q3)) per order, sane when the error at least
+/// halves per order (rate ln 2 up to 20). The signatures' mesh part and identify's model error.
+inline constexpr double kOrderLevelRatio = 2.718281828459045;
+inline constexpr double kOrderRateMin = 0.6931471805599453, kOrderRateMax = 20.0;
+
 /// One error component of one quantity: the estimated error of the value that was run.
 struct Component {
   std::string name;           ///< "mesh", "modes", "steps", "penalty", "window"

@@ -1,5 +1,7 @@
 #include "identify/forward.hpp"
 
+#include "accuracy/estimate.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -94,23 +96,13 @@ std::vector<int> refinement_orders(int p) {
   return {first, first + 1, first + 2};
 }
 
-RefinementError refinement_error(double q0, double q1, double q2, double q_run) {
+RefinementError refinement_error(double q0, double q1, double q2, int run_level) {
+  const accuracy::Component component = accuracy::three_level_at(
+      "mesh", q0, q1, q2, run_level + 1, accuracy::kOrderLevelRatio, accuracy::kOrderRateMin, accuracy::kOrderRateMax);
   RefinementError result;
-  const double r = (q0 - q1) / (q1 - q2);
-  double error;
-  if (std::isfinite(r) && r > 1.0) {
-    const double extrapolated = q2 + (q2 - q1) / (r - 1.0);
-    error = 1.25 * std::abs(extrapolated - q_run);
-  } else {
-    error = 3.0 * std::max(std::abs(q0 - q1), std::abs(q1 - q2));
-    result.verified = false;
-  }
-  if (std::isfinite(error) && std::isfinite(q_run) && q_run != 0.0) {
-    result.relative = error / std::abs(q_run);
-  } else {
-    result.relative = 0.0;
-    result.verified = false;
-  }
+  result.relative = std::abs(component.delta);
+  result.verified = component.verified;
+  if (!std::isfinite(result.relative)) result = {0.0, false};
   return result;
 }
 

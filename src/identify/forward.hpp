@@ -98,16 +98,17 @@ double sweep_value(const SweepTable& table, const std::string& quantity, const s
 /// +1, +2} (identify's and plan's; DETECTION.md sec. 1, the p-refinement of MODEL.md's elements).
 std::vector<int> refinement_orders(int p);
 
-/// The numerical error of a quantity from its values q0, q1, q2 at the three refinement_orders and
-/// its value q_run at the order that is run: Richardson's extrapolation from the three levels when
-/// they converge monotonically (ratio of differences r > 1), 1.25 |q_inf - q_run| (the factor of a
-/// GCI); otherwise 3 times the larger difference and verified = false. Relative to |q_run|; 0 and
-/// not verified when a level is missing (NaN).
+/// The numerical error of a quantity from its values q0, q1, q2 at the three refinement_orders, of
+/// the level `run_level` (0, 1, 2) that is run: src/accuracy's three-level Richardson read
+/// geometrically in the order (accuracy::three_level_at with kOrderLevelRatio and its rate range:
+/// Fs 1.25 with a sane rate, 3 outside it; non-monotone or not converging: 3 times the change to
+/// the next level, not verified). Relative to the run's value; 0 and not verified when a level is
+/// missing (NaN). Measured on identify's beam: effectivity 1.25-1.31 (docs/benchmarks.md 13).
 struct RefinementError {
   double relative = 0.0;
   bool verified = true;
 };
-RefinementError refinement_error(double q0, double q1, double q2, double q_run);
+RefinementError refinement_error(double q0, double q1, double q2, int run_level);
 
 /// The YAML text of a number list [a, b, c].
 std::string list_text(const std::vector<double>& values);

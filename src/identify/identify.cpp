@@ -314,7 +314,8 @@ std::string plot_map(const fs::path& dir, const IdentifySpec& spec, const std::v
                                                       " log10(chi2)\n" + data.str());
   io::write_file_atomic(dir / "identify_minima.dat", marks.str());
   io::write_file_atomic(dir / "identify_region.dat", region.str());
-  script << "set terminal pngcairo size 900,700 noenhanced\nset output 'identify_map.png'\n";
+  script << "# gnuplot script written by crackle identify; run: gnuplot identify_map.gp\n"
+         << "set terminal pngcairo size 900,700 noenhanced\nset output 'identify_map.png'\n";
   script << "set xlabel " << spectral::gnuplot_quote(spec.unknowns[0].key) << "\n"
          << "set xrange [" << spec.unknowns[0].lower << ":" << spec.unknowns[0].upper << "]\n";
   if (k > 1) script << "set yrange [" << spec.unknowns[1].lower << ":" << spec.unknowns[1].upper << "]\n";
@@ -330,9 +331,8 @@ std::string plot_map(const fs::path& dir, const IdentifySpec& spec, const std::v
            << "'identify_minima.dat' using 1:(log10($2)) with points pt 7 ps 1.5 title 'minima'\n";
   }
   io::write_file_atomic(dir / "identify_map.gp", script.str());
-  const std::string command = "cd " + spectral::shell_quote(dir.string()) + " && gnuplot identify_map.gp > /dev/null 2>&1";
-  if (std::system(command.c_str()) != 0) return "gnuplot failed on identify_map.gp";
-  return "";
+  const spectral::PlotResult drawn = spectral::run_gnuplot(dir / "identify_map.png", dir / "identify_map.gp", probe);
+  return drawn.written ? "" : drawn.note;
 }
 
 std::string plot_fit(const fs::path& dir, const IdentifySpec& spec, const Fitted& best, const VectorX& weights) {
@@ -345,17 +345,15 @@ std::string plot_fit(const fs::path& dir, const IdentifySpec& spec, const Fitted
     data << i + 1 << " " << m.value << " " << m.sigma << " " << best.model[static_cast<Eigen::Index>(i)] << " "
          << weights[static_cast<Eigen::Index>(i)] << " \"" << measurement_label(m) << "\"\n";
   }
-  io::write_file_atomic(dir / "identify_fit.dat", data.str());
-  std::ostringstream script;
-  script << "set terminal pngcairo size 900,600 noenhanced\nset output 'identify_fit.png'\n"
-         << "set title 'measured (sigma bars) against fitted (model-error bars), normalised by the measured value'\n"
-         << "set ylabel 'value / measured [-]'\nset xtics rotate by -30\nset offsets 0.5,0.5,0,0\n"
-         << "plot 'identify_fit.dat' using 1:(1):($3/$2):xtic(6) with yerrorbars pt 7 title 'measured', "
-         << "'' using ($1+0.1):($4/$2):($5/$2) with yerrorbars pt 5 title 'fitted'\n";
-  io::write_file_atomic(dir / "identify_fit.gp", script.str());
-  const std::string command = "cd " + spectral::shell_quote(dir.string()) + " && gnuplot identify_fit.gp > /dev/null 2>&1";
-  if (std::system(command.c_str()) != 0) return "gnuplot failed on identify_fit.gp";
-  return "";
+  spectral::PlotOptions options;
+  options.title = "measured (sigma bars) against fitted (model-error bars), normalised by the measured value";
+  options.width = 900;
+  const std::string body =
+      "set ylabel 'value / measured [-]'\nset xtics rotate by -30\nset offsets 0.5,0.5,0,0\n"
+      "plot 'identify_fit.dat' using 1:(1):($3/$2):xtic(6) with yerrorbars pt 7 title 'measured', "
+      "'' using ($1+0.1):($4/$2):($5/$2) with yerrorbars pt 5 title 'fitted'\n";
+  const spectral::PlotResult drawn = spectral::plot_script(dir / "identify_fit.png", data.str(), body, options);
+  return drawn.written ? "" : drawn.note;
 }
 
 }  // namespace
@@ -614,8 +612,8 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
   std::vector<bool> error_verified(n, true);
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Index ii = static_cast<Eigen::Index>(i);
-    const RefinementError error = refinement_error(level_models[0][ii], level_models[1][ii], level_models[2][ii],
-                                                   level_models[static_cast<std::size_t>(p - first)][ii]);
+    const RefinementError error =
+        refinement_error(level_models[0][ii], level_models[1][ii], level_models[2][ii], p - first);
     // Relative to the value, carried to every parameter vector.
     model_error[ii] = error.relative;
     error_verified[i] = error.verified;

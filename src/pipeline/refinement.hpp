@@ -19,11 +19,9 @@
 
 namespace crackle::pipeline {
 
-/// Rate of the mesh levels: the element order is raised by one per level, so the observed "order"
-/// is the rate ln((Q1 - Q2)/(Q2 - Q3)) per order; sane when the error at least halves per order
-/// (rate ln 2 up to 20).
-inline constexpr double kOrderLevelRatio = 2.718281828459045;
-inline constexpr double kRateMin = 0.6931471805599453, kRateMax = 20.0;
+/// Rate of the mesh levels (accuracy::kOrderLevelRatio: the order raised by one per level).
+inline constexpr double kOrderLevelRatio = accuracy::kOrderLevelRatio;
+inline constexpr double kRateMin = accuracy::kOrderRateMin, kRateMax = accuracy::kOrderRateMax;
 /// The highest element order (the box mesher's); beyond it the mesh is refined by front layers.
 inline constexpr int kHighestOrder = 4;
 /// The most front layers the mesh refinement adds to the scene's at the highest order.

@@ -138,26 +138,18 @@ std::string plot_face_maps(const fs::path& dir, const PlanSpec& spec, const std:
     for (int c = 0; c < 2; ++c) extent[c] = std::max(extent[c], std::abs(x[c == 0 ? u : v] - spec.sensors[0][c == 0 ? u : v]));
   const bool long_face = extent[0] > 3.0 * extent[1] || extent[1] > 3.0 * extent[0];
   const int columns = long_face ? 1 : std::min(shown, 3), rows = (shown + columns - 1) / columns;
-  std::ostringstream script;
-  script << "# gnuplot script written by crackle plan; run: gnuplot plan_map.gp\n"
-         << "set terminal pngcairo size " << (long_face ? 1000 : 440 * columns) << ","
-         << (long_face ? 230 : 400) * rows + 40 << " noenhanced\n"
-         << "set output 'plan_map.png'\nset view map\nset pm3d map\nset palette rgb 33,13,10\n"
-         << "set xlabel '" << static_cast<char>('x' + u) << " [m]'\nset ylabel '" << static_cast<char>('x' + v)
-         << " [m]'\n" << (long_face ? "" : "set size ratio -1\n") << "set multiplot layout " << rows << "," << columns
-         << " title " << spectral::gnuplot_quote(figure + " over the sensor face " + spec.face +
-                                                 " (colour), per drive point and frequency")
-         << "\n" << plots.str() << "unset multiplot\n";
-  io::write_file_atomic(dir / "plan_map.dat", data.str());
-  io::write_file_atomic(dir / "plan_map.gp", script.str());
-  spectral::PlotOptions probe;
-  if (!spectral::gnuplot_available(probe)) return "gnuplot not found: plan_map.png not drawn (plan_map.gp written)";
-  std::error_code ignored;
-  fs::remove(dir / "plan_map.png", ignored);
-  const std::string command = "cd " + spectral::shell_quote(dir.string()) + " && gnuplot plan_map.gp > /dev/null 2>&1";
-  if (std::system(command.c_str()) != 0 || !fs::is_regular_file(dir / "plan_map.png", ignored))
-    return "gnuplot failed on plan_map.gp";
-  return "";
+  spectral::PlotOptions options;
+  options.width = long_face ? 1000 : 440 * columns;
+  options.height = (long_face ? 230 : 400) * rows + 40;
+  std::ostringstream body;  // the panels carry their own titles; the figure's is the multiplot's
+  body << "unset grid\nset view map\nset pm3d map\nset palette rgb 33,13,10\n"
+       << "set xlabel '" << static_cast<char>('x' + u) << " [m]'\nset ylabel '" << static_cast<char>('x' + v)
+       << " [m]'\n" << (long_face ? "" : "set size ratio -1\n") << "set multiplot layout " << rows << "," << columns
+       << " title " << spectral::gnuplot_quote(figure + " over the sensor face " + spec.face +
+                                               " (colour), per drive point and frequency")
+       << "\n" << plots.str() << "unset multiplot\n";
+  const spectral::PlotResult drawn = spectral::plot_script(dir / "plan_map.png", data.str(), body.str(), options);
+  return drawn.written ? "" : drawn.note;
 }
 
 json finite_or_null(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
@@ -511,7 +503,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   const std::size_t run_level = static_cast<std::size_t>(order_run - levels.front());
   for (std::size_t m = 0; m < static_cast<std::size_t>(scene.modal.modes); ++m)
     frequency_error.push_back(identify::refinement_error(at(level_f_b[0], m), at(level_f_b[1], m), at(level_f_b[2], m),
-                                                         at(level_f_b[run_level], m)));
+                                                         static_cast<int>(run_level)));
   const auto sweep_settings = [&](const DriveFrequency& f, std::vector<std::pair<std::string, std::string>>& set) {
     set.emplace_back("sweep.points", std::to_string(f.subharmonic() ? kSubharmonicPoints : 2));
     set.emplace_back("sweep.stability", f.subharmonic() ? "true" : "false");
@@ -582,7 +574,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
       const std::size_t r = level_run(l, p, f);
       q[l] = sweep_value(level_tables[r], quantity, sensor, 0.5 * (level_ranges[r][0] + level_ranges[r][1]), branch);
     }
-    return identify::refinement_error(q[0], q[1], q[2], q[run_level]);
+    return identify::refinement_error(q[0], q[1], q[2], static_cast<int>(run_level));
   };
 
   // the largest first harmonic over the sensors of each sample run (the reference of noise.floor)

@@ -28,19 +28,56 @@ std::string order_label(double order) {
 }
 
 
+/// Written whole or not at all: a temporary beside it, renamed over it.
 void write_text(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  const fs::path temporary = fs::path(path).concat(".tmp");
+  std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
   out << text;
   out.close();
-  if (!out) throw IoError("cannot write " + path.string());
+  std::error_code error;
+  if (!out || (fs::rename(temporary, path, error), error)) {
+    fs::remove(temporary, error);
+    throw IoError("cannot write " + path.string());
+  }
 }
 
-std::string terminal_lines() {
+std::string terminal_lines(const PlotOptions& options) {
+  const std::string size = std::to_string(options.width) + "," + std::to_string(options.height);
   return "if (strstrt(GPVAL_TERMINALS, 'pngcairo') > 0) {\n"
-         "  set terminal pngcairo size 1000,600 noenhanced\n"
+         "  set terminal pngcairo size " + size + " noenhanced\n"
          "} else {\n"
-         "  set terminal png size 1000,600 noenhanced\n"
+         "  set terminal png size " + size + " noenhanced\n"
          "}\n";
+}
+
+/// gnuplot on a written script in the PNG's folder; the PNG checked.
+void run_script(const fs::path& png, const fs::path& script, const PlotOptions& options, PlotResult& result) {
+  const fs::path folder = png.has_parent_path() ? png.parent_path() : fs::path(".");
+  const fs::path gnuplot = find_executable(options.gnuplot);
+  if (gnuplot.empty()) {
+    result.note = "gnuplot ('" + options.gnuplot + "') not found: " + png.filename().string() +
+                  " not drawn; data and script written";
+    return;
+  }
+  std::error_code ignored;
+  fs::remove(png, ignored);
+  const std::string command = "cd " + shell_quote(folder.string()) + " && " + shell_quote(gnuplot.string()) + " " +
+                              shell_quote(script.filename().string()) + " 2>&1";
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (!pipe) {
+    result.note = "could not start gnuplot";
+    return;
+  }
+  char buffer[512];
+  std::string output;
+  while (std::fgets(buffer, sizeof buffer, pipe)) {
+    if (output.size() < 4000) output += buffer;
+  }
+  const int status = ::pclose(pipe);
+  std::error_code error;
+  const bool made = fs::is_regular_file(png, error) && fs::file_size(png, error) > 0;
+  result.written = status == 0 && made;
+  result.note = result.written ? output : "gnuplot failed (status " + std::to_string(status) + "): " + output;
 }
 
 /// Writes data and script, runs gnuplot in the PNG's folder, checks the PNG.
@@ -51,40 +88,13 @@ PlotResult draw(const fs::path& png, const std::string& data, const std::string&
   result.data = fs::path(png).replace_extension(".dat");
   result.script = fs::path(png).replace_extension(".gp");
   try {
-    const fs::path folder = png.has_parent_path() ? png.parent_path() : fs::path(".");
     std::string script = "# gnuplot script written by crackle; run: gnuplot " +
-                         result.script.filename().string() + "\n" + terminal_lines() +
+                         result.script.filename().string() + "\n" + terminal_lines(options) +
                          "set output " + gnuplot_quote(png.filename().string()) + "\n" +
                          "set title " + gnuplot_quote(options.title) + "\nset grid\n" + script_body;
     write_text(result.data, data);
     write_text(result.script, script);
-    const fs::path gnuplot = find_executable(options.gnuplot);
-    if (gnuplot.empty()) {
-      result.note = "gnuplot ('" + options.gnuplot + "') not found: " + png.filename().string() +
-                    " not drawn; data and script written";
-      return result;
-    }
-    std::error_code ignored;
-    fs::remove(png, ignored);
-    const std::string command = "cd " + shell_quote(folder.string()) + " && " +
-                                shell_quote(gnuplot.string()) + " " +
-                                shell_quote(result.script.filename().string()) + " 2>&1";
-    FILE* pipe = ::popen(command.c_str(), "r");
-    if (!pipe) {
-      result.note = "could not start gnuplot";
-      return result;
-    }
-    char buffer[512];
-    std::string output;
-    while (std::fgets(buffer, sizeof buffer, pipe)) {
-      if (output.size() < 4000) output += buffer;
-    }
-    const int status = ::pclose(pipe);
-    std::error_code error;
-    const bool made = fs::is_regular_file(png, error) && fs::file_size(png, error) > 0;
-    result.written = status == 0 && made;
-    result.note = result.written ? output
-                                 : "gnuplot failed (status " + std::to_string(status) + "): " + output;
+    run_script(png, result.script, options, result);
   } catch (const std::exception& error) {
     result.written = false;
     result.note = error.what();
@@ -125,6 +135,19 @@ fs::path find_executable(const std::string& name) {
     if (runnable(candidate)) return candidate;
   }
   return {};
+}
+
+PlotResult run_gnuplot(const fs::path& png, const fs::path& script, const PlotOptions& options) {
+  PlotResult result;
+  result.png = png;
+  result.script = script;
+  try {
+    run_script(png, script, options, result);
+  } catch (const std::exception& error) {
+    result.written = false;
+    result.note = error.what();
+  }
+  return result;
 }
 
 PlotResult plot_script(const fs::path& png, const std::string& data, const std::string& script_body,

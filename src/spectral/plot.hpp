@@ -20,6 +20,7 @@ struct PlotOptions {
   std::string quantity = "displacement";  ///< what the signal is, for the y label
   std::string unit = "m";               ///< unit of the signal
   std::string gnuplot = "gnuplot";      ///< executable: a name looked up in PATH, or a path
+  int width = 1000, height = 600;       ///< the PNG's size [pixels]
 };
 
 /// Outcome of a plot.
@@ -62,6 +63,12 @@ PlotResult plot_ringdown_envelope(const std::filesystem::path& png, const Ringdo
 /// unit of H (e.g. "m/N").
 PlotResult plot_frf(const std::filesystem::path& png, const FrequencyResponse& frf,
                     const std::vector<double>& reference_hz, const PlotOptions& options);
+
+/// Runs gnuplot on `script`, already written in the PNG's folder and drawing `png` there (the
+/// folder is gnuplot's working directory), and checks the PNG. For figures of several data files;
+/// the others are plot_script's.
+PlotResult run_gnuplot(const std::filesystem::path& png, const std::filesystem::path& script,
+                       const PlotOptions& options);
 
 /// Any plot: writes `data` as `<name>.dat` and a script of `script_body` (after the terminal,
 /// output, title and grid lines) as `<name>.gp`, and runs gnuplot in the PNG's folder.
