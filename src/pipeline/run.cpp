@@ -29,6 +29,7 @@
 #include "pipeline/run_scene.hpp"
 #include "modal/modal.hpp"
 #include "spectral/harmonics.hpp"
+#include "spectral/steady_monitor.hpp"
 #include "spectral/plot.hpp"
 #include "spectral/ringdown.hpp"
 #include "spectral/signature.hpp"
@@ -104,8 +105,6 @@ struct ProbeSpectrum {
   std::string quantity;  ///< "u_x" ... or "gap" (an opening probe), for messages and plot titles
   std::string label;     ///< spectrum.json's "component": the axis, or "gap"
   int component = 2;
-  std::unique_ptr<spectral::HarmonicAccumulator> accumulator;
-  std::vector<double> values;
 };
 
 /// The probe column the spectrum analyses: the normal gap (column 0) of an opening probe, else the
@@ -272,91 +271,30 @@ Index probe_interval(const scene::Scene& scene, double frequency, double dt) {
   return static_cast<Index>(std::clamp(steps, 1.0, 1e9));
 }
 
-/// Per probe, a harmonic accumulator fed every step, and the steady-state verdict over all probes.
+/// The probes' spectra of a run: spectral::SteadyStateMonitor over the analysed component of each
+/// probe (fed every step), and the spectrum stage's files.
 class SpectrumMonitor {
  public:
-  SpectrumMonitor(const scene::Scene& scene, double frequency, double dt) : spectrum_(*scene.spectrum) {
+  SpectrumMonitor(const scene::Scene& scene, double frequency, double dt)
+      : spectrum_(*scene.spectrum), options_(harmonic_options(scene, frequency, dt)),
+        monitor_(options_, dt, scene.transient->probes.size(), spectrum_.window_periods, spectrum_.tolerance,
+                 spectrum_.min_periods) {
     const scene::TransientSection& section = *scene.transient;
-    options_.excitation_frequency_hz = frequency;
-    options_.max_order = spectrum_.harmonics;
-    options_.subharmonics = spectrum_.subharmonics;
-    window_periods_ = spectrum_.window_periods + (spectrum_.subharmonics && spectrum_.window_periods % 2);
-    criterion_.window_periods = window_periods_;
-    criterion_.tolerance = spectrum_.tolerance > 0.0 ? spectrum_.tolerance : 1e-300;
-    // The highest harmonic must lie below the Nyquist frequency of the time step: say which keys.
-    if (!(2.0 * spectrum_.harmonics * frequency * dt < 1.0)) {
-      throw InputError(scene.where("transient.excitation.frequency") +
-                       ": expected a frequency whose harmonic " + std::to_string(spectrum_.harmonics) +
-                       " (spectrum.harmonics) lies below the Nyquist frequency " + format_number(0.5 / dt) +
-                       " Hz of the time step " + format_number(dt) + " s, got " + format_number(frequency) +
-                       " Hz; lower the frequency or spectrum.harmonics, or set a smaller transient.time_step");
-    }
     for (const scene::ProbeSection& probe : section.probes) {
       ProbeSpectrum entry;
       entry.name = probe.name;
       entry.component = analysed_component(probe, section.excitation->direction);
       entry.label = analysed_label(probe, entry.component);
       entry.quantity = analysed_quantity(probe, entry.component);
-      entry.accumulator = std::make_unique<spectral::HarmonicAccumulator>(options_, dt, 0.0);
       probes_.push_back(std::move(entry));
     }
-    dt_ = dt;
   }
 
-  /// The progress line's note: how far the steady-state detector is, and when it may stop the run
-  /// (the largest change extrapolated geometrically from its last two checks).
-  std::string progress_note(double elapsed) const {
-    if (spectrum_.tolerance <= 0.0 || probes_.empty()) return "";
-    const int periods = probes_.front().accumulator->n_periods();
-    const int earliest = std::max(spectrum_.min_periods, 2 * window_periods_);
-    const double per_period = periods > 0 ? elapsed / periods : 0.0;
-    char text[200];
-    if (!steady_ || periods < earliest) {
-      std::snprintf(text, sizeof text, "steady state: first check at period %d (now %d), in %s", earliest, periods,
-                    duration_text(per_period * (earliest - periods)).c_str());
-      return text;
-    }
-    std::string eta = "not yet converging";
-    if (previous_change_ > 0.0 && steady_->change > 0.0 && steady_->change < previous_change_ &&
-        change_period_ > previous_period_) {
-      const double rate = std::log(steady_->change / previous_change_) / (change_period_ - previous_period_);
-      const double more = std::max(0.0, std::log(spectrum_.tolerance / steady_->change) / rate);
-      eta = "ETA " + duration_text(std::max(0.0, per_period * more - (clock_.seconds() - check_seconds_))) +
-            " at the current rate";
-    }
-    std::snprintf(text, sizeof text, "steady state: change %.2g (tolerance %.2g) at period %d, %s",
-                  steady_->change, spectrum_.tolerance, periods, eta.c_str());
-    return text;
-  }
+  std::string progress_note(double elapsed) const { return monitor_.progress_note(elapsed); }
 
   /// Feeds one step; true when every probe's table has settled (the run may stop).
   bool add(const transient::StepView& view) {
-    int completed = 0;
-    for (std::size_t p = 0; p < probes_.size(); ++p) {
-      const double value = view.probe_sample[9 * p + probes_[p].component];
-      probes_[p].values.push_back(value);
-      completed = probes_[p].accumulator->add(view.time, value);
-    }
-    if (completed == 0 || spectrum_.tolerance <= 0.0) return false;
-    const int periods = probes_.front().accumulator->n_periods();
-    if (periods < std::max(spectrum_.min_periods, 2 * window_periods_)) return false;
-    spectral::SteadyState verdict;
-    verdict.settled = true;
-    verdict.periods_used = periods;
-    verdict.change = 0.0;
-    for (const ProbeSpectrum& probe : probes_) {
-      const spectral::SteadyState state = probe.accumulator->steady_state(criterion_);
-      verdict.settled = verdict.settled && state.settled;
-      verdict.change = std::max(verdict.change, state.change);
-    }
-    if (steady_ && periods > change_period_) {
-      previous_change_ = steady_->change;
-      previous_period_ = change_period_;
-    }
-    change_period_ = periods;
-    check_seconds_ = clock_.seconds();
-    steady_ = verdict;
-    return verdict.settled;
+    return monitor_.add(view.time, [&](std::size_t p) { return view.probe_sample[9 * p + probes_[p].component]; });
   }
 
   /// Stage 3: closes the records, writes the spectra and the plots; returns spectrum.json's content
@@ -365,16 +303,27 @@ class SpectrumMonitor {
                        std::vector<ProbeSignature>& signatures, std::ostream& out);
 
  private:
-  double dt_ = 0.0;
-  Stopwatch clock_;             ///< since the monitor was made (the run's start)
-  double check_seconds_ = 0.0;  ///< clock_ at the last steady-state check
-  double previous_change_ = 0.0;
-  int previous_period_ = 0, change_period_ = 0;
+  /// The accumulators' options, once the highest harmonic is known to lie below the Nyquist
+  /// frequency of the time step (else an error that names the keys, before the accumulators' own).
+  static spectral::HarmonicOptions harmonic_options(const scene::Scene& scene, double frequency, double dt) {
+    const scene::SpectrumSection& spectrum = *scene.spectrum;
+    if (!(2.0 * spectrum.harmonics * frequency * dt < 1.0)) {
+      throw InputError(scene.where("transient.excitation.frequency") +
+                       ": expected a frequency whose harmonic " + std::to_string(spectrum.harmonics) +
+                       " (spectrum.harmonics) lies below the Nyquist frequency " + format_number(0.5 / dt) +
+                       " Hz of the time step " + format_number(dt) + " s, got " + format_number(frequency) +
+                       " Hz; lower the frequency or spectrum.harmonics, or set a smaller transient.time_step");
+    }
+    spectral::HarmonicOptions options;
+    options.excitation_frequency_hz = frequency;
+    options.max_order = spectrum.harmonics;
+    options.subharmonics = spectrum.subharmonics;
+    return options;
+  }
+
   const scene::SpectrumSection& spectrum_;
   spectral::HarmonicOptions options_;
-  spectral::SteadyStateCriterion criterion_;
-  std::optional<spectral::SteadyState> steady_;
-  int window_periods_ = 0;
+  spectral::SteadyStateMonitor monitor_;
   std::vector<ProbeSpectrum> probes_;
 };
 
@@ -390,14 +339,14 @@ nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::file
   nlohmann::json spectrum_json = {{"excitation_hz", frequency}, {"amplitude_convention",
                                   "peak amplitude A_k of x(t) = A_0 + sum A_k cos(2 pi k f t + phi_k), t from the start of the run"}};
   // Close the record: grid points of the last period still waiting for stencil samples.
-  for (ProbeSpectrum& probe : probes_) probe.accumulator->finish();
-  const int periods = probes_.front().accumulator->n_periods();
-  const int used = std::min(window_periods_, periods - (options_.subharmonics ? periods % 2 : 0));
+  for (std::size_t p = 0; p < probes_.size(); ++p) monitor_.accumulator(p).finish();
+  const int periods = monitor_.accumulator(0).n_periods();
+  const int used = std::min(monitor_.window_periods(), periods - (options_.subharmonics ? periods % 2 : 0));
   if (used < 1) {
     throw SolverError(scene.file + ": spectrum: the run completed " + std::to_string(periods) +
                       " excitation periods, too few for a harmonic table (raise transient.periods)");
   }
-  spectral::SteadyState state = steady_.value_or(spectral::SteadyState{});
+  spectral::SteadyState state = monitor_.verdict().value_or(spectral::SteadyState{});
   state.periods_used = periods;
   state.limit_reached = !state.settled;
   nlohmann::json probes_json = nlohmann::json::object();
@@ -406,7 +355,8 @@ nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::file
   spectral::PlotOptions plot;
   for (std::size_t p = 0; p < probes_.size(); ++p) {
     const ProbeSpectrum& probe = probes_[p];
-    const spectral::HarmonicTable table = probe.accumulator->last_table(used);
+    const spectral::HarmonicAccumulator& accumulator = monitor_.accumulator(p);
+    const spectral::HarmonicTable table = accumulator.last_table(used);
     probes_json[probe.name] = spectral::probe_json(probe.label, table);
     ProbeSignature signature;
     signature.name = probe.name;
@@ -414,13 +364,13 @@ nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::file
     signature.previous_window.fill(std::numeric_limits<double>::quiet_NaN());
     signature.window_before.fill(std::numeric_limits<double>::quiet_NaN());
     if (periods >= 2 * used) {
-      signature.previous_window = signature_values(probe.accumulator->table(periods - 2 * used, used));
+      signature.previous_window = signature_values(accumulator.table(periods - 2 * used, used));
     }
     if (periods >= 3 * used) {
-      signature.window_before = signature_values(probe.accumulator->table(periods - 3 * used, used));
+      signature.window_before = signature_values(accumulator.table(periods - 3 * used, used));
     }
     signatures.push_back(signature);
-    const std::vector<double>& values = probe.values;
+    const std::vector<double>& values = monitor_.values(p);
     spectral::SpectrumOptions spectrum_options;
     spectrum_options.excitation_frequency_hz = frequency;
     spectrum_options.periods = used;

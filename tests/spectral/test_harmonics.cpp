@@ -6,6 +6,7 @@
 #include "core/errors.hpp"
 #include "core/quadrature.hpp"
 #include "spectral/harmonics.hpp"
+#include "spectral/steady_monitor.hpp"
 #include "synthetic.hpp"
 
 using namespace crackle;
@@ -397,4 +398,57 @@ TEST(SteadyState, StopsAtThePeriodLimitWhenNotSettled) {
   EXPECT_THROW(detect_steady_state(std::vector<double>(64 * 3, 0.0), sampling, rich_options(),
                                    criterion),
                InputError);
+}
+
+// The run's steady-state controller over several probes (spectral::SteadyStateMonitor): it settles
+// when the slowest channel does, at the period a single-channel detection of that channel gives;
+// before its first check it says when that comes; without a tolerance it never settles; the window
+// is made even with sub-harmonics; every sample is kept.
+TEST(SteadyStateMonitor, SettlesWithTheSlowestChannelAndSaysWhenItFirstChecks) {
+  const auto truth = rich_content();
+  const Sampling sampling{1.0 / (kF * 64), 0.0};
+  const auto slow = [&](double t) {
+    return evaluate(truth, kF, t) + 0.3 * std::exp(-t * kF / 8.0) * std::cos(2 * M_PI * 0.8 * kF * t);
+  };
+  const auto fast = [&](double t) { return evaluate(truth, kF, t); };
+  const int steps = 300 * 64;
+  const auto slow_values = sample(slow, sampling, steps);
+  const auto fast_values = sample(fast, sampling, steps);
+
+  SteadyStateMonitor monitor(rich_options(), sampling.time_step, 2, 3, 1e-6, 10);
+  EXPECT_EQ(monitor.window_periods(), 4);  // 3 made even: sub-harmonics
+  EXPECT_NE(monitor.progress_note(0.0).find("first check at period 10"), std::string::npos)
+      << monitor.progress_note(0.0);
+  int stopped = -1;
+  for (int i = 0; i < steps && stopped < 0; ++i) {
+    const double time = i * sampling.time_step;
+    if (monitor.add(time, [&](std::size_t c) { return c == 0 ? fast_values[i] : slow_values[i]; })) stopped = i;
+  }
+  ASSERT_GE(stopped, 0) << "never settled";
+  ASSERT_TRUE(monitor.verdict().has_value());
+  EXPECT_TRUE(monitor.verdict()->settled);
+  EXPECT_LT(monitor.verdict()->change, 1e-6);
+  EXPECT_EQ(monitor.values(1).size(), static_cast<std::size_t>(stopped + 1));
+  EXPECT_NE(monitor.progress_note(1.0).find("steady state: change"), std::string::npos) << monitor.progress_note(1.0);
+
+  // The slow channel alone, checked the same way, settles at the same period.
+  SteadyStateCriterion criterion;
+  criterion.window_periods = 4;
+  criterion.tolerance = 1e-6;
+  criterion.max_periods = 300;
+  const SteadyStateRun alone = detect_steady_state(slow_values, sampling, rich_options(), criterion);
+  ASSERT_TRUE(alone.state.settled);
+  EXPECT_EQ(monitor.verdict()->periods_used, std::max(10, alone.state.periods_used));
+  EXPECT_GT(monitor.verdict()->periods_used, 10);  // the slow channel made it wait
+
+  SteadyStateMonitor never(rich_options(), sampling.time_step, 1, 4, 0.0, 10);
+  HarmonicAccumulator plain(rich_options(), sampling.time_step, 0.0);
+  for (int i = 0; i < 40 * 64; ++i) {
+    EXPECT_FALSE(never.add(i * sampling.time_step, [&](std::size_t) { return fast_values[i]; }));
+    plain.add(i * sampling.time_step, fast_values[i]);
+  }
+  EXPECT_EQ(never.progress_note(1.0), "");
+  EXPECT_FALSE(never.verdict().has_value());
+  EXPECT_EQ(never.accumulator(0).n_periods(), plain.n_periods());
+  EXPECT_EQ(table_change(never.accumulator(0).last_table(4), plain.last_table(4)), 0.0);
 }
