@@ -148,6 +148,7 @@ class Sweeps {
                      {"order", setting.order},
                      {"harmonics", harmonics(setting)},
                      {"max_frequency_hz", model.at("max_frequency_hz")},
+                     {"penalty", model.value("normal_penalty", 0.0)},
                      {"modes", model.at("modes")},
                      {"pairs", model.at("pairs")},
                      {"points", outcome.document.at("points")},
@@ -163,19 +164,27 @@ class Sweeps {
     std::string text = box_mesh() ? "order " + std::to_string(setting.order) : std::string("the Gmsh mesh");
     if (setting.layers) text += ", front layers +" + std::to_string(setting.layers);
     if (setting.band) text += ", band x" + std::to_string(1 << setting.band);
+    if (setting.penalty) text += ", penalty x" + std::to_string(1 << (2 * setting.penalty));
     text += ", H = " + std::to_string(harmonics(setting));
     return text;
   }
+  /// The scene's sweep has contact pairs whose penalty can be refined.
+  bool has_contact() const { return base_penalty() > 0.0; }
   int harmonics(const Setting& setting) const { return scene_.sweep->harmonics + kHarmonicsStep * setting.harmonics; }
   const nlohmann::json& runs_json() const { return runs_; }
   double refinement_s() const { return refinement_s_; }
   bool box_mesh() const { return scene_.gmsh_file.empty(); }
 
  private:
+  double base_penalty() const { return outcomes_.at(first_key_).document.at("model").value("normal_penalty", 0.0); }
+
   std::vector<scene::Override> level_overrides(const Setting& setting) const {
     const double base = outcomes_.at(first_key_).document.at("model").at("max_frequency_hz").get<double>();
     std::vector<scene::Override> levels = order_and_band_overrides(scene_, setting, base);
     levels.push_back({"sweep.harmonics", std::to_string(harmonics(setting))});
+    if (setting.penalty) {
+      levels.push_back({"crack.contact.penalty", format_number(base_penalty() * (1 << (2 * setting.penalty)))});
+    }
     // Half the points: the peaks are read off a parabola through the three points around them, which
     // moves them by less than 1e-6 between 200 and 100 points on the beam (docs/benchmarks.md 11.6),
     // far below the changes the refinements measure; the continuation costs about half.
@@ -235,6 +244,11 @@ accuracy::Estimate estimate_of(const Quantity& quantity, Sweeps& sweeps, const S
     components.push_back(std::isfinite(harmonics)
                              ? accuracy::one_refinement("harmonics", value, harmonics, ratio, kHarmonicsOrder)
                              : missing_component("harmonics", value));
+    if (sweeps.has_contact()) {  // the penalty's error falls as 1/k (MODEL.md eq. 25d)
+      const double penalty = at(n.penalty);
+      components.push_back(std::isfinite(penalty) ? accuracy::one_refinement("penalty", value, penalty, 4.0, 1.0)
+                                                  : missing_component("penalty", value));
+    }
   }
   return accuracy::combine(quantity.label, value, components);
 }
@@ -272,6 +286,7 @@ std::optional<Setting> refine(Sweeps& sweeps, const Setting& setting, const Sett
   }
   choices.push_back({"modes", n.band, sweeps.get(n.band).wall_s});
   choices.push_back({"harmonics", n.harmonics, sweeps.get(n.harmonics).wall_s});
+  if (sweeps.has_contact()) choices.push_back({"penalty", n.penalty, sweeps.get(n.penalty).wall_s});
   return choose_refinement(choices, summary, budget_left,
                            sweeps.box_mesh() && !n.coarse ? "mesh (not estimated below element order 3)"
                                                           : "none (no component has an error left)",
@@ -323,8 +338,9 @@ void sweep_with_accuracy(const scene::Scene& scene, const RunRoute& route, const
                                              sweeps.refinement_s(), wall);
   accuracy["method"] =
       "one refinement per component from the setting swept (DETECTION.md sec. 1): mesh: the two lower element orders "
-      "(Richardson with the observed rate per order, GCI safety factor 1.25, 3 where not asymptotic); modes: twice "
-      "the band; harmonics: H + 2 (the change, three times: the convergence in H is not monotone); the refinement "
+      "(Richardson with the observed rate per order, GCI safety factor 1.25, 3 where not asymptotic; the bilinear "
+      "frequency Richardson in DOFs^-1/3, 3); modes: twice the band; harmonics: H + 2 (the change, three times: the "
+      "convergence in H is not monotone); penalty: four times it (where the crack has contact); the refinement "
       "sweeps take half the points. Estimated: each probe's peaks (value and frequency, the parabola through the "
       "three points around the largest, or the value at a range end), the fold and period-doubling frequencies (by "
       "kind and order along the branch) and the bilinear frequency. delta: signed relative error of the value, "

@@ -137,7 +137,8 @@ SweepOutcome sweep_scene(const scene::Scene& scene, const SweepCommandOptions& o
   document["scene"] = scene.file;
   document["stages"] = stages;
   document["model"] = {{"modes", reduced.modes}, {"pairs", reduced.pairs}, {"pair_rows", reduced.system.n_rows()},
-                       {"unknowns", unknowns}, {"max_frequency_hz", reduced.max_frequency_hz}};
+                       {"unknowns", unknowns}, {"max_frequency_hz", reduced.max_frequency_hz},
+                       {"normal_penalty", reduced.system.normal_penalty}};
   if (modes) {  // the modal stage's size: the frequencies' estimate is Richardson in DOFs^-1/3
     Index free = 0;
     for (const modal::VariantResult& variant : modes->variants) free = std::max(free, variant.constraints.n_free());

@@ -97,7 +97,7 @@ TEST(SweepRoute, TheBeamAsWrittenIsSweptOnTheRouteMeshWithAnEstimateThatHoldsIts
   const nlohmann::json& estimate = accuracy["probes"]["tip"]["peak_a2_over_a1"]["value"];
   EXPECT_EQ(estimate["value"].get<double>(), peak);
   EXPECT_TRUE(estimate["verified"].get<bool>());
-  for (const char* component : {"mesh", "modes", "harmonics"}) {
+  for (const char* component : {"mesh", "modes", "harmonics", "penalty"}) {
     EXPECT_TRUE(estimate["components"].contains(component)) << component;
   }
   EXPECT_GE(estimate["error"].get<double>() / true_error, 1.0)
@@ -107,6 +107,8 @@ TEST(SweepRoute, TheBeamAsWrittenIsSweptOnTheRouteMeshWithAnEstimateThatHoldsIts
   EXPECT_TRUE(accuracy["probes"]["tip"]["peak_a3_over_a1"]["value"]["error"].is_number());
   EXPECT_TRUE(accuracy["bilinear_hz"]["components"].contains("mesh"));
   EXPECT_FALSE(accuracy["bilinear_hz"]["components"].contains("harmonics"));  // a modal result
+  EXPECT_FALSE(accuracy["bilinear_hz"]["components"].contains("penalty"));
+  EXPECT_GT(sweep["model"]["normal_penalty"].get<double>(), 0.0);
   // f_b's estimate is the DOF-based one of crackle modal and run: within [1, 3] of its true error
   // (measured 2.72; the geometric rate in p it had was 0.56 of it).
   const nlohmann::json& fb = accuracy["bilinear_hz"];
@@ -141,9 +143,10 @@ TEST(SweepAccuracy, AWrittenMeshIsSweptAsWrittenAndEstimatedOnlyWhenAsked) {
   const nlohmann::json& peak = accuracy["probes"]["tip"]["peak_a2_over_a1"]["value"];
   EXPECT_FALSE(peak["components"]["mesh"]["verified"].get<bool>());
   EXPECT_NE(peak["components"]["mesh"]["reason"].get<std::string>().find("order 3"), std::string::npos);
-  // The band and H refinements ran, and their parts are numbers that moved the value.
-  EXPECT_EQ(accuracy["runs"].size(), 3u) << accuracy["runs"].dump();
-  for (const char* component : {"modes", "harmonics"}) {
+  // The band, H and penalty refinements ran (the crack has contact), and their parts are numbers that
+  // moved the value.
+  EXPECT_EQ(accuracy["runs"].size(), 4u) << accuracy["runs"].dump();
+  for (const char* component : {"modes", "harmonics", "penalty"}) {
     EXPECT_TRUE(peak["components"][component]["delta"].is_number()) << component;
     EXPECT_NE(peak["components"][component]["refined"].get<double>(), peak["value"].get<double>()) << component;
   }
