@@ -111,9 +111,7 @@ void check_sweep_memory(const scene::Scene& scene, Index rows, Index modes) {
   const scene::SweepSection& section = *scene.sweep;
   sweep::HarmonicBalanceOptions options;
   options.harmonics = section.harmonics;
-  options.solver = section.solver == "dense"    ? sweep::LinearSolver::dense
-                   : section.solver == "krylov" ? sweep::LinearSolver::krylov
-                                                : sweep::LinearSolver::automatic;
+  options.solver = sweep::linear_solver_named(section.solver);
   const bool matrix_free = sweep::HarmonicBalance::selects_matrix_free(options, rows);
   const double needed = sweep::HarmonicBalance::memory_bytes(rows, modes, section.harmonics, matrix_free);
   std::string source;

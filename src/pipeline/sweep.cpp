@@ -286,9 +286,7 @@ sweep::HarmonicBalanceOptions balance_options(const reduced::ReducedSystem& syst
   sweep::HarmonicBalanceOptions options;
   options.harmonics = harmonics;
   options.subharmonic = nu;
-  options.solver = solver == "dense"    ? sweep::LinearSolver::dense
-                   : solver == "krylov" ? sweep::LinearSolver::krylov
-                                        : sweep::LinearSolver::automatic;
+  options.solver = sweep::linear_solver_named(solver);
   // The arclength runs in (G / s, Omega / Omega_from): with s the static gap response the many gap
   // harmonics dominate it near a super-harmonic resonance and the frequency creeps (thousands of
   // points). A larger s makes the step mostly frequency (the Newton tolerance is on r / s).

@@ -16,6 +16,10 @@
 
 namespace crackle::sweep {
 
+LinearSolver linear_solver_named(const std::string& name) {
+  return name == "dense" ? LinearSolver::dense : name == "krylov" ? LinearSolver::krylov : LinearSolver::automatic;
+}
+
 namespace {
 
 using Complex = std::complex<double>;

@@ -30,6 +30,7 @@
 #include <complex>
 #include <functional>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "core/types.hpp"
@@ -47,6 +48,9 @@ enum class LinearSolver {
   dense,      ///< J formed (c(2H+1) square) and LU-factorised: fastest for small problems
   krylov,     ///< matrix-free GMRES with the pair-block preconditioner (krylov.hpp): no square matrix
 };
+
+/// The solver a scene names (sweep.solver: dense, krylov, anything else auto).
+LinearSolver linear_solver_named(const std::string& name);
 
 /// Options of the harmonic-balance solver.
 struct HarmonicBalanceOptions {
