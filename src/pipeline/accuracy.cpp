@@ -37,7 +37,7 @@ EstimatePlan accuracy_plan(const scene::Scene& scene, const RunRoute& route) {
     plan.reason = "accuracy.estimate: off";
     return plan;
   }
-  if (route.model != "reduced") {
+  if (route.model != "reduced") {  // RunRoute::model: the word run.json writes
     if (accuracy.estimate == "on") {
       throw InputError(scene.where("accuracy.estimate") + ": expected auto or off with transient.model: full (each "
                        "refinement run of the full model costs as much as the run or more; transient.model: auto or "

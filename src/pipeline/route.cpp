@@ -110,9 +110,9 @@ RunRoute choose_route(const scene::Scene& scene, int ranks) {
   route.scene_order = scene.box.order;
   route.cells = scene.box.cells;
   route.order = scene.box.order;
-  if (transient.model != "auto") {
-    route.model = transient.model;
-    route.reason = "transient.model: " + transient.model + " as the scene says";
+  if (transient.model != scene::TransientModel::automatic) {
+    route.model = scene::model_name(transient.model);
+    route.reason = "transient.model: " + route.model + " as the scene says";
     return route;
   }
   route.automatic = true;
@@ -136,7 +136,7 @@ RunRoute choose_sweep_route(const scene::Scene& scene) {
   route.model = "reduced";
   route.scene_cells = route.cells = scene.box.cells;
   route.scene_order = route.order = scene.box.order;
-  const std::string model = scene.transient ? scene.transient->model : std::string("auto");
+  const std::string model = scene.transient ? scene::model_name(scene.transient->model) : std::string("auto");
   if (model != "auto") {
     route.reason = "transient.model: " + model + ": the sweep's reduced model on the scene's mesh as written";
     return route;

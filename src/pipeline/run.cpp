@@ -971,19 +971,19 @@ RunOutcome run_scene(const scene::Scene& scene, const RunCommandOptions& options
     modal_stage = {"modal", modes.has_value(), "shared with the run of the same mesh in this process", 0.0};
   } else {
     modes = run_modal_stage(scene, model, directory, options.modal_cache, modal_stage, out,
-                            scene.transient->model == "reduced");
+                            scene.transient->model == scene::TransientModel::reduced);
   }
   stages.push_back(modal_stage);
   outcome.mode = excitation_mode(scene, modes);
 
-  Stage transient_stage{"transient", true, "the scene has a transient: section (model: " + scene.transient->model + ")"};
+  Stage transient_stage{"transient", true, "the scene has a transient: section (model: " + scene::model_name(scene.transient->model) + ")"};
   Stopwatch transient_clock;
   TransientSetup setup = transient_setup(scene, model, modes, options);
   std::optional<SpectrumMonitor> spectrum;
   std::unique_ptr<transient::TransientSolver> solver;
   transient::ProbeHistory reduced_probes;
   double dt = 0.0;
-  if (scene.transient->model == "reduced") {
+  if (scene.transient->model == scene::TransientModel::reduced) {
     reduced_probes = run_reduced_stage(scene, model, setup, options, spectrum, dt, outcome, out);
   } else {
     solver = run_transient_stage(scene, model, setup, directory, spectrum);
@@ -1062,7 +1062,7 @@ void run_run_command(const RunCommandOptions& options, std::ostream& out) {
   const RunRoute route = choose_route(written, ranks);
   overrides.insert(overrides.end(), route.overrides.begin(), route.overrides.end());
   const scene::Scene scene = route.overrides.empty() ? written : scene::load_scene(options.scene_path, overrides);
-  if (ranks > 1 && scene.transient->model == "reduced") {
+  if (ranks > 1 && scene.transient->model == scene::TransientModel::reduced) {
     throw InputError(scene.where("transient.model") + ": expected full under mpirun -np " + std::to_string(ranks) +
                      " (one transient over several processes is the full explicit model), got reduced; run the "
                      "reduced model without mpirun (it takes seconds on one process)");
@@ -1073,7 +1073,7 @@ void run_run_command(const RunCommandOptions& options, std::ostream& out) {
   std::string modal_reason;
   on_every_rank([&] {
     check_memory(scene, !needed_variants(scene, modal_reason).empty() ? matrices::eigen_solve
-                        : scene.transient->model == "reduced"       ? matrices::static_solve
+                        : scene.transient->model == scene::TransientModel::reduced ? matrices::static_solve
                         : !scene.gmsh_file.empty()                  ? matrices::stiffness
                                                                     : matrices::none);
   });

@@ -674,7 +674,9 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
   transient.safety_factor = values.number("transient.safety_factor");
   transient.force_time_step = values.flag("transient.force_time_step");
   transient.variant = values.word("transient.variant");
-  transient.model = values.word("transient.model");
+  const std::string model = values.word("transient.model");
+  transient.model = model == "full" ? TransientModel::full : model == "reduced" ? TransientModel::reduced
+                                                                                : TransientModel::automatic;
   if (!values.is_word("transient.reduced.modes")) transient.reduced.modes = values.integer("transient.reduced.modes");
   if (!values.is_word("transient.reduced.max_frequency")) {
     transient.reduced.max_frequency_hz = values.number("transient.reduced.max_frequency");
@@ -745,7 +747,7 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
     transient.initial.push_back(initial);
   }
   transient.snapshots = values.integer("transient.snapshots.count");
-  if (transient.model == "reduced") {
+  if (transient.model == TransientModel::reduced) {
     if (transient.time_step) {
       values.fail("transient.time_step", "auto with transient.model: reduced (its step is set by "
                   "transient.reduced.steps_per_period)", format_number(*transient.time_step));
@@ -983,7 +985,7 @@ std::string reduced_route_refusal(const Scene& scene, int ranks) {
 }
 
 bool takes_route_mesh(const Scene& scene, const std::string& command) {
-  if (!scene.gmsh_file.empty() || !scene.transient || scene.transient->model != "auto") return false;
+  if (!scene.gmsh_file.empty() || !scene.transient || scene.transient->model != TransientModel::automatic) return false;
   if (command == "sweep") return scene.sweep && scene.has_crack() && scene.contact.model == "penalty";
   return command == "run" && reduced_route_refusal(scene, 1).empty();
 }
@@ -1135,6 +1137,10 @@ std::string scene_format_markdown() {
          "`crackle plan scene.yaml -o DIR` ranks candidate sensors, drive points and drive frequencies for the "
          "cracks of the prior (README, \"Test planning\").\n\n" +
          markdown_table(plan_parameters());
+}
+
+std::string model_name(TransientModel model) {
+  return model == TransientModel::full ? "full" : model == TransientModel::reduced ? "reduced" : "auto";
 }
 
 }  // namespace crackle::scene

@@ -140,6 +140,11 @@ struct ReducedSection {
   bool residual_flexibility = true;
 };
 
+/// transient.model: the full explicit model, the reduced model, or auto (the route chooses).
+enum class TransientModel { full, reduced, automatic };
+/// The scene's word for it: "full", "reduced", "auto".
+std::string model_name(TransientModel model);
+
 struct TransientSection {
   std::optional<ExcitationSection> excitation;
   DampingSection damping;
@@ -149,7 +154,7 @@ struct TransientSection {
   double safety_factor = defaults::kSafetyFactor;
   bool force_time_step = false;
   std::string variant = "open";
-  std::string model = "auto";  ///< "full", "reduced" or "auto" (pipeline/route.hpp chooses)
+  TransientModel model = TransientModel::automatic;  ///< transient.model (pipeline/route.hpp chooses auto's)
   ReducedSection reduced;
   std::vector<ProbeSection> probes;
   std::vector<InitialSection> initial;
