@@ -59,6 +59,12 @@ const VariantResult* ModalResult::find(mesh::Variant variant) const {
   return nullptr;
 }
 
+Index ModalResult::free_dofs() const {
+  Index free = 0;
+  for (const VariantResult& result : variants) free = std::max(free, result.constraints.n_free());
+  return free;
+}
+
 MatrixX open_on_uncracked_dofs(const MatrixX& open_shapes, const VariantResult& open,
                                const VariantResult& uncracked) {
   // Mesh node standing for each uncracked DOF node: the original (lowest-numbered) one.

@@ -155,6 +155,9 @@ struct ModalResult {
   double total_s = 0.0;
   /// The variant's result, or nullptr if it was not solved.
   const VariantResult* find(mesh::Variant variant) const;
+  /// The size of the modal problem: the most free DOFs of any variant solved (0 when none was).
+  /// The frequencies' refinement estimates are Richardson extrapolations in this size.
+  Index free_dofs() const;
 };
 
 /// Assembles and solves every variant, pairs open to uncracked modes.

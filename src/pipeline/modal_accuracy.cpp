@@ -125,8 +125,8 @@ ModalLevel modal_level(const modal::ModalResult& result, int order, double wall_
   for (const modal::VariantResult& variant : result.variants) {
     const VectorX& frequencies = variant.modes.frequencies_hz;
     level.variants[mesh::variant_name(variant.variant)] = {frequencies.data(), frequencies.data() + frequencies.size()};
-    level.dofs = std::max<long>(level.dofs, static_cast<long>(variant.constraints.n_free()));
   }
+  level.dofs = static_cast<long>(result.free_dofs());
   level.pairs = result.pairs;
   return level;
 }

@@ -946,10 +946,8 @@ static std::optional<ModeSignature> excitation_mode(const scene::Scene& scene, c
   if (!modes || !excitation || excitation->mode <= 0) return std::nullopt;
   for (const modal::ModePair& pair : modes->pairs) {
     if (!pair.paired || pair.uncracked_mode + 1 != excitation->mode) continue;
-    double dofs = 0.0;
-    for (const modal::VariantResult& variant : modes->variants)
-      dofs = std::max(dofs, static_cast<double>(variant.constraints.n_free()));
-    return ModeSignature{excitation->mode, pair.f_uncracked_hz, pair.f_open_hz, pair.f_bilinear_hz, dofs};
+    return ModeSignature{excitation->mode, pair.f_uncracked_hz, pair.f_open_hz, pair.f_bilinear_hz,
+                         static_cast<double>(modes->free_dofs())};
   }
   return std::nullopt;
 }

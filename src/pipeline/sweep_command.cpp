@@ -139,11 +139,8 @@ SweepOutcome sweep_scene(const scene::Scene& scene, const SweepCommandOptions& o
   document["model"] = {{"modes", reduced.modes}, {"pairs", reduced.pairs}, {"pair_rows", reduced.system.n_rows()},
                        {"unknowns", unknowns}, {"max_frequency_hz", reduced.max_frequency_hz},
                        {"normal_penalty", reduced.system.normal_penalty}};
-  if (modes) {  // the modal stage's size: the frequencies' estimate is Richardson in DOFs^-1/3
-    Index free = 0;
-    for (const modal::VariantResult& variant : modes->variants) free = std::max(free, variant.constraints.n_free());
-    document["model"]["free_dofs"] = free;
-  }
+  // the modal stage's size: the frequencies' estimate is Richardson in DOFs^-1/3
+  if (modes) document["model"]["free_dofs"] = modes->free_dofs();
   document["seconds_per_point"] = result.points.empty() ? 0.0 : result.solve_s / double(result.points.size());
   write_outputs(directory, result, settings, out);
   print_summary(result, document, out);
