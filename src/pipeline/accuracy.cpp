@@ -99,15 +99,7 @@ class Runs {
 
   void adopt(const Setting& setting) const { folders_.adopt(setting); }
 
-  std::string describe(const Setting& setting) const {
-    std::string text = box_mesh() ? "order " + std::to_string(setting.order) : std::string("the Gmsh mesh");
-    if (setting.layers) text += ", front layers +" + std::to_string(setting.layers);
-    if (setting.band) text += ", band x" + std::to_string(1 << setting.band);
-    if (setting.steps) text += ", steps x" + std::to_string(1 << setting.steps);
-    if (setting.penalty) text += ", penalty x" + std::to_string(1 << (2 * setting.penalty));
-    if (setting.window) text += ", steady state / " + format_number(std::pow(10.0, setting.window));
-    return text;
-  }
+  std::string describe(const Setting& setting) const { return describe_setting(setting, box_mesh()); }
   const nlohmann::json& runs_json() const { return runs_; }
   double refinement_s() const { return refinement_s_; }
   bool box_mesh() const { return scene_.gmsh_file.empty(); }
@@ -123,9 +115,7 @@ class Runs {
     const RunOutcome& base = outcomes_.at(first_key_);  // the scene's own run comes first
     std::vector<scene::Override> levels = order_and_band_overrides(scene_, setting, base.max_frequency_hz);
     if (setting.steps) levels.push_back({"transient.reduced.steps_per_period", std::to_string(steps_per_period(setting))});
-    if (setting.penalty) {
-      levels.push_back({"crack.contact.penalty", format_number(base.normal_penalty * (1 << (2 * setting.penalty)))});
-    }
+    if (auto penalty = penalty_override(setting, base.normal_penalty)) levels.push_back(*penalty);
     if (setting.window) {  // the start transient decays further: a tighter steady state, a longer limit
       const double tolerance = scene_.spectrum->tolerance * std::pow(10.0, -setting.window);
       levels.push_back({"spectrum.steady_state.tolerance", format_number(tolerance)});
@@ -167,14 +157,10 @@ accuracy::Estimate estimate_of(const std::string& quantity, Runs& runs, const Se
   std::vector<accuracy::Component> components;
   if (probe < 0 && n.coarse) {
     // A frequency: Richardson in DOFs^-1/3 with Fs = 3, as crackle modal's (docs/benchmarks.md 11.9).
-    std::vector<double> values, dofs;
-    for (const Setting& level : {*n.coarser, *n.coarse, setting}) {
+    components.push_back(frequency_levels_component(n, setting, [&](const Setting& level) {
       const RunOutcome& outcome = runs.get(level);
-      values.push_back(signature(outcome, probe, q));
-      dofs.push_back(outcome.mode ? outcome.mode->dofs : 0.0);
-    }
-    components.push_back(
-        frequency_mesh_component({n.coarser->order, n.coarse->order, setting.order}, values, dofs, setting.order));
+      return std::pair{signature(outcome, probe, q), outcome.mode ? outcome.mode->dofs : 0.0};
+    }));
   } else {
     components.push_back(n.coarse ? mesh_component(value, true, signature(runs.get(*n.coarser), probe, q),
                                                    signature(runs.get(*n.coarse), probe, q), runs.box_mesh())

@@ -9,6 +9,7 @@
 
 #include "core/errors.hpp"
 #include "mesh/box.hpp"
+#include "pipeline/modal_accuracy.hpp"
 
 namespace crackle::pipeline {
 
@@ -44,6 +45,21 @@ Neighbours neighbours(const Setting& setting, bool box_mesh) {
   return n;
 }
 
+std::optional<scene::Override> penalty_override(const Setting& setting, double base_penalty) {
+  if (!setting.penalty) return std::nullopt;
+  return scene::Override{"crack.contact.penalty", format_number(base_penalty * (1 << (2 * setting.penalty)))};
+}
+
+std::string describe_setting(const Setting& setting, bool box_mesh) {
+  std::string text = box_mesh ? "order " + std::to_string(setting.order) : std::string("the Gmsh mesh");
+  if (setting.layers) text += ", front layers +" + std::to_string(setting.layers);
+  if (setting.band) text += ", band x" + std::to_string(1 << setting.band);
+  if (setting.steps) text += ", steps x" + std::to_string(1 << setting.steps);
+  if (setting.penalty) text += ", penalty x" + std::to_string(1 << (2 * setting.penalty));
+  if (setting.window) text += ", steady state / " + format_number(std::pow(10.0, setting.window));
+  return text;
+}
+
 std::vector<scene::Override> order_and_band_overrides(const scene::Scene& scene, const Setting& setting,
                                                       double base_max_frequency_hz) {
   std::vector<scene::Override> levels;
@@ -63,6 +79,17 @@ std::vector<scene::Override> order_and_band_overrides(const scene::Scene& scene,
     else levels.push_back({"transient.reduced.max_frequency", format_number(base_max_frequency_hz * (1 << setting.band))});
   }
   return levels;
+}
+
+accuracy::Component frequency_levels_component(const Neighbours& n, const Setting& setting,
+                                               const std::function<std::pair<double, double>(const Setting&)>& value_and_dofs) {
+  std::vector<double> values, dofs;
+  for (const Setting& level : {*n.coarser, *n.coarse, setting}) {
+    const auto [value, free_dofs] = value_and_dofs(level);
+    values.push_back(value);
+    dofs.push_back(free_dofs);
+  }
+  return frequency_mesh_component({n.coarser->order, n.coarse->order, setting.order}, values, dofs, setting.order);
 }
 
 accuracy::Component missing_component(const std::string& name, double value) {

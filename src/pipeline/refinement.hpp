@@ -10,6 +10,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -57,10 +58,24 @@ Neighbours neighbours(const Setting& setting, bool box_mesh);
 std::vector<scene::Override> order_and_band_overrides(const scene::Scene& scene, const Setting& setting,
                                                       double base_max_frequency_hz);
 
+/// The override of a setting's contact penalty (crack.contact.penalty: the scene's own run's
+/// `base_penalty` x4 per level), or none at the scene's own penalty.
+std::optional<scene::Override> penalty_override(const Setting& setting, double base_penalty);
+
+/// A setting as the terminal and the `runs` list show it: the order (or "the Gmsh mesh") and every
+/// component refined from the scene's own run ("order 3, band x2, penalty x4").
+std::string describe_setting(const Setting& setting, bool box_mesh);
+
 /// The mesh component of a quantity `value` from its values q1, q2 at the two lower orders
 /// (Richardson with the observed rate); where there are no levels (`levels` false) or a level lacks
 /// the quantity (NaN), a component that is not verified, with the reason.
 accuracy::Component mesh_component(double value, bool levels, double q1, double q2, bool box_mesh);
+
+/// The mesh component of a frequency at `setting` from the two lower orders of `n`:
+/// frequency_mesh_component (Richardson in the modal stage's DOFs^-1/3) over the value and the free
+/// DOFs that `value_and_dofs` reads off each level's results.
+accuracy::Component frequency_levels_component(const Neighbours& n, const Setting& setting,
+                                               const std::function<std::pair<double, double>(const Setting&)>& value_and_dofs);
 
 /// A component whose refinement lacks the quantity (NaN there): not verified, with the reason.
 accuracy::Component missing_component(const std::string& name, double value);

@@ -161,12 +161,7 @@ class Sweeps {
   void adopt(const Setting& setting) const { folders_.adopt(setting); }
 
   std::string describe(const Setting& setting) const {
-    std::string text = box_mesh() ? "order " + std::to_string(setting.order) : std::string("the Gmsh mesh");
-    if (setting.layers) text += ", front layers +" + std::to_string(setting.layers);
-    if (setting.band) text += ", band x" + std::to_string(1 << setting.band);
-    if (setting.penalty) text += ", penalty x" + std::to_string(1 << (2 * setting.penalty));
-    text += ", H = " + std::to_string(harmonics(setting));
-    return text;
+    return describe_setting(setting, box_mesh()) + ", H = " + std::to_string(harmonics(setting));
   }
   /// The scene's sweep has contact pairs whose penalty can be refined.
   bool has_contact() const { return base_penalty() > 0.0; }
@@ -182,9 +177,7 @@ class Sweeps {
     const double base = outcomes_.at(first_key_).document.at("model").at("max_frequency_hz").get<double>();
     std::vector<scene::Override> levels = order_and_band_overrides(scene_, setting, base);
     levels.push_back({"sweep.harmonics", std::to_string(harmonics(setting))});
-    if (setting.penalty) {
-      levels.push_back({"crack.contact.penalty", format_number(base_penalty() * (1 << (2 * setting.penalty)))});
-    }
+    if (auto penalty = penalty_override(setting, base_penalty())) levels.push_back(*penalty);
     // Half the points: the peaks are read off a parabola through the three points around them, which
     // moves them by less than 1e-6 between 200 and 100 points on the beam (docs/benchmarks.md 11.6),
     // far below the changes the refinements measure; the continuation costs about half.
@@ -224,14 +217,10 @@ accuracy::Estimate estimate_of(const Quantity& quantity, Sweeps& sweeps, const S
   if (quantity.modal && n.coarse) {
     // The bilinear frequency: Richardson in DOFs^-1/3 with Fs = 3, as crackle modal's and run's
     // (a geometric rate in p was 0.56 of the true error on data/beam.yaml, docs/benchmarks.md 11.9).
-    std::vector<double> values, dofs;
-    for (const Setting& level : {*n.coarser, *n.coarse, setting}) {
+    components.push_back(frequency_levels_component(n, setting, [&](const Setting& level) {
       const nlohmann::json& document = sweeps.get(level).document;
-      values.push_back(value_of(document, quantity.pointer));
-      dofs.push_back(document.at("model").value("free_dofs", 0.0));
-    }
-    components.push_back(
-        frequency_mesh_component({n.coarser->order, n.coarse->order, setting.order}, values, dofs, setting.order));
+      return std::pair{value_of(document, quantity.pointer), document.at("model").value("free_dofs", 0.0)};
+    }));
   } else {
     components.push_back(n.coarse ? mesh_component(value, true, at(*n.coarser), at(*n.coarse), sweeps.box_mesh())
                                   : mesh_component(value, false, 0.0, 0.0, sweeps.box_mesh()));
