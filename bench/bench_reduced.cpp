@@ -34,7 +34,6 @@ namespace {
 
 using crackle::bench::parse_list;
 
-constexpr double kPi = 3.14159265358979323846;
 
 /// CPU time of the process [s] (all threads): on a loaded machine the wall time waits for a core.
 double process_cpu_seconds() {

@@ -19,6 +19,24 @@ int exit_code_for(const std::exception& error) {
   return 1;
 }
 
+std::string shortest_text(double value) {
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, result.ptr);
+}
+
+std::string join(const std::vector<std::string>& words, const std::string& separator) {
+  std::string text;
+  for (std::size_t i = 0; i < words.size(); ++i) text += (i ? separator : "") + words[i];
+  return text;
+}
+
+std::string list_text(const std::vector<double>& values) {
+  std::vector<std::string> entries;
+  for (double value : values) entries.push_back(format_number(value));
+  return "[" + join(entries) + "]";
+}
+
 std::string format_number(double value) {
   // Round to 15 significant digits (hides binary noise of computed values), then print the
   // shortest text that reads back as that number.

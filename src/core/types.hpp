@@ -10,6 +10,10 @@ namespace crackle {
 /// Index of a node, element or degree of freedom. 32-bit, like the PETSc build Debian ships.
 using Index = std::int32_t;
 
+/// pi and 2 pi (C++17 has no std::numbers).
+inline constexpr double kPi = 3.14159265358979323846;
+inline constexpr double kTwoPi = 2.0 * kPi;
+
 using Vec3 = Eigen::Vector3d;
 using VectorX = Eigen::VectorXd;
 using MatrixX = Eigen::MatrixXd;

@@ -34,12 +34,6 @@ int uniform_index(double at, double origin, double size, int cells) {
 
 }  // namespace
 
-std::string join(const std::vector<std::string>& words, const std::string& separator) {
-  std::string text;
-  for (std::size_t i = 0; i < words.size(); ++i) text += (i ? separator : "") + words[i];
-  return text;
-}
-
 double number_of(const YAML::Node& node, const std::string& file, const std::string& path, bool integer) {
   double value = kNaN;
   if (!node.IsScalar() || !scene::parse_number(node.Scalar(), value) || !std::isfinite(value) ||
@@ -104,12 +98,6 @@ RefinementError refinement_error(double q0, double q1, double q2, int run_level)
   result.verified = component.verified;
   if (!std::isfinite(result.relative)) result = {0.0, false};
   return result;
-}
-
-std::string list_text(const std::vector<double>& values) {
-  std::vector<std::string> entries;
-  for (double value : values) entries.push_back(format_number(value));
-  return "[" + join(entries) + "]";
 }
 
 std::vector<Unknown> parse_unknowns(const YAML::Node& map, const std::string& file, const std::string& where, int line) {

@@ -20,7 +20,6 @@ struct Scene;
 namespace crackle::identify {
 
 /// Section-parsing helpers of identify: and plan: (their messages: "file:line: path: expected ..., got ...").
-std::string join(const std::vector<std::string>& words, const std::string& separator = ", ");
 /// A finite number (an integer when `integer`) at `node`, else InputError naming `path`.
 double number_of(const YAML::Node& node, const std::string& file, const std::string& path, bool integer = false);
 /// InputError for the first key of the map `map` not in `keys`, with a "did you mean" suggestion.
@@ -109,8 +108,5 @@ struct RefinementError {
   bool verified = true;
 };
 RefinementError refinement_error(double q0, double q1, double q2, int run_level);
-
-/// The YAML text of a number list [a, b, c].
-std::string list_text(const std::vector<double>& values);
 
 }  // namespace crackle::identify

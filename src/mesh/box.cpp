@@ -52,7 +52,7 @@ int find_line(const std::vector<double>& lines, double position, double tol) {
 }
 
 std::string range_text(double low, double high) {
-  return "[" + format_number(low) + ", " + format_number(high) + "]";
+  return list_text({low, high});
 }
 
 /// Adds the graded lines around `front` along one axis: at front -/+ h_side ratio^k, k = 1..layers,

@@ -14,7 +14,6 @@
 namespace crackle::modal {
 namespace {
 
-constexpr double kTwoPi = 6.283185307179586476925286766559;
 
 double signed_frequency_hz(double eigenvalue) {
   return std::copysign(std::sqrt(std::abs(eigenvalue)), eigenvalue) / kTwoPi;

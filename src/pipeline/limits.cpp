@@ -22,7 +22,8 @@ namespace {
 /// a box of even 1e4 cells along each of three axes is far beyond any memory).
 constexpr int kListedCells = 1000000;
 
-std::string number_text(double value) {
+/// A count or size for messages: whole below 1e6, else two significant digits ("1.2e7").
+std::string rounded_text(double value) {
   if (value < 1e6) return format_number(std::round(value));
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.2g", value);
@@ -92,16 +93,16 @@ void check_memory(const scene::Scene& scene, int matrices, MeshUse use) {
   const auto& cells = scene.box.cells;
   std::string graded;  // the lines the crack's edges and the grading layers add, when they add many
   if (mesh.cells[0] * mesh.cells[1] * mesh.cells[2] > 1.5 * cells[0] * cells[1] * cells[2]) {
-    graded = " (" + number_text(mesh.cells[0]) + " x " + number_text(mesh.cells[1]) + " x " +
-             number_text(mesh.cells[2]) + " with the crack's lines and the grading layers of mesh.box.grading)";
+    graded = " (" + rounded_text(mesh.cells[0]) + " x " + rounded_text(mesh.cells[1]) + " x " +
+             rounded_text(mesh.cells[2]) + " with the crack's lines and the grading layers of mesh.box.grading)";
   }
   const std::string matrix_text = matrices == 1  ? ", K"
                                   : matrices > 1 ? ", " + std::to_string(matrices) + " sparse matrices of K's size"
                                                  : "";
   throw InputError(scene.where("mesh.box.cells") + ": expected a mesh that fits in memory, got [" +
                    std::to_string(cells[0]) + ", " + std::to_string(cells[1]) + ", " + std::to_string(cells[2]) +
-                   "] cells of order " + std::to_string(scene.box.order) + graded + ": about " + number_text(mesh.nodes) +
-                   " nodes, " + number_text(mesh.elements) + " elements, " + number_text(mesh.dofs) +
+                   "] cells of order " + std::to_string(scene.box.order) + graded + ": about " + rounded_text(mesh.nodes) +
+                   " nodes, " + rounded_text(mesh.elements) + " elements, " + rounded_text(mesh.dofs) +
                    " DOFs, which need at least " + bytes_text(needed) + " for the mesh" + matrix_text +
                    " and the vectors, more than the " + bytes_text(available) + " available (" + source + ")");
 }
@@ -126,7 +127,7 @@ void check_sweep_memory(const scene::Scene& scene, Index rows, Index modes) {
   }
   throw InputError(scene.where("sweep.harmonics") + ": expected a harmonic balance that fits in memory, got " +
                    std::to_string(rows) + " pair rows x (2 x " + std::to_string(section.harmonics) + " + 1) = " +
-                   number_text(unknowns) + " unknowns, which need at least " + bytes_text(needed) + " with the " +
+                   rounded_text(unknowns) + " unknowns, which need at least " + bytes_text(needed) + " with the " +
                    (matrix_free ? "krylov" : "dense") + " solver, more than the " + bytes_text(available) +
                    " available (" + source + ")" + hint);
 }
@@ -145,14 +146,14 @@ void check_run_outputs(const scene::Scene& scene, const MeshEstimate& mesh, doub
   const std::string length_key = section.periods ? "transient.periods" : "transient.duration";
   if (history > available) {
     throw InputError(scene.where(length_key) + ": expected a run whose histories fit in memory, got " +
-                     number_text(steps) + " steps (" + number_text(probe_rows) + " probe rows), which need at least " +
+                     rounded_text(steps) + " steps (" + rounded_text(probe_rows) + " probe rows), which need at least " +
                      bytes_text(history) + ", more than the " + bytes_text(available) + " available (" + source +
                      "); shorten the run or lower transient.history.samples_per_period");
   }
   if (section.snapshots > 0) {
     if (static_cast<double>(section.snapshots) > steps) {
       throw InputError(scene.where("transient.snapshots.count") + ": expected at most one snapshot per step (" +
-                       number_text(steps) + " steps), got " + std::to_string(section.snapshots));
+                       rounded_text(steps) + " steps), got " + std::to_string(section.snapshots));
     }
     // A binary VTU: coordinates and displacement (3 + 3 doubles per node), connectivity and offsets.
     const double nodes = mesh.nodes > 0.0 ? mesh.nodes : mesh.file_bytes / 40.0;

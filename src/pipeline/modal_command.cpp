@@ -125,8 +125,7 @@ void run_modal_command(const ModalCommandOptions& options, std::ostream& out, co
         const std::array<int, 3>& cells = *plan.check_cells;
         std::vector<scene::Override> at_check = overrides;
         at_check.push_back({"mesh.box.order", std::to_string(kCheckOrder)});
-        at_check.push_back({"mesh.box.cells", "[" + std::to_string(cells[0]) + ", " + std::to_string(cells[1]) + ", " +
-                                                  std::to_string(cells[2]) + "]"});
+        at_check.push_back({"mesh.box.cells", list_text({double(cells[0]), double(cells[1]), double(cells[2])})});
         const scene::Scene check_scene = scene::load_scene(options.scene_path, at_check);
         bool fits = true;
         try {

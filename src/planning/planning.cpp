@@ -47,7 +47,6 @@ constexpr double kDetect = 3.0;
 constexpr double kZ95 = 1.959963984540054;
 const std::vector<std::string> kFaces = {"x-", "x+", "y-", "y+", "z-", "z+"};
 
-using identify::join;
 using identify::number_of;
 using identify::only_keys;
 
@@ -426,7 +425,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   for (std::size_t i = 0; i < spec.sensors.size(); ++i) {
     YAML::Node probe(YAML::NodeType::Map);
     probe["name"] = sensor_name(i);
-    probe["point"] = YAML::Load(identify::list_text({spec.sensors[i][0], spec.sensors[i][1], spec.sensors[i][2]}));
+    probe["point"] = YAML::Load(list_text({spec.sensors[i][0], spec.sensors[i][1], spec.sensors[i][2]}));
     if (spec.component >= 0) probe["component"] = std::string(1, static_cast<char>('x' + spec.component));
     probes.push_back(probe);
   }
@@ -435,7 +434,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   for (const char* key : {"face", "group", "point"})
     if (excitation[key]) excitation.remove(key);
   const Vec3& first_drive = spec.drive_points.front();
-  excitation["point"] = YAML::Load(identify::list_text({first_drive[0], first_drive[1], first_drive[2]}));
+  excitation["point"] = YAML::Load(list_text({first_drive[0], first_drive[1], first_drive[2]}));
 
   // ---- the prior samples (centres of equal bins per key) and their Jacobian points
   std::vector<std::vector<double>> axes(k);
@@ -535,7 +534,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
         ForwardCase run = s < n_levels ? ForwardCase{middle, levels[n_levels - 1 - s], {}}
                                        : ForwardCase{samples[s - n_levels], order_run, {}};
         const Vec3& x = spec.drive_points[p];
-        run.set = {{"transient.excitation.point", identify::list_text({x[0], x[1], x[2]})},
+        run.set = {{"transient.excitation.point", list_text({x[0], x[1], x[2]})},
                    {"sweep.frequency.from.mode", std::to_string(drive.mode)},
                    {"sweep.frequency.from.ratio", format_number(drive.ratio * (1.0 - half))},
                    {"sweep.frequency.to.mode", std::to_string(drive.mode)},
@@ -605,7 +604,7 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
           where_b[{s, j, p, f}] = cases_b.size();
           ForwardCase run{points[s * per_sample + j], 0, {}};
           const Vec3& x = spec.drive_points[p];
-          run.set = {{"transient.excitation.point", identify::list_text({x[0], x[1], x[2]})},
+          run.set = {{"transient.excitation.point", list_text({x[0], x[1], x[2]})},
                      {"sweep.frequency.from", format_number(range[0])},
                      {"sweep.frequency.to", format_number(range[1])}};
           sweep_settings(spec.frequencies[f], run.set);

@@ -15,7 +15,6 @@ namespace {
 
 /// The pair's local frame in row order (normal, tangent 1, tangent 2): the normal is the x axis.
 const Vec3 kLocalNormal = Vec3::UnitX();
-constexpr double kPi = 3.14159265358979323846;
 
 void require_size(const char* what, Index actual, Index expected) {
   if (actual != expected)

@@ -20,7 +20,6 @@
 namespace crackle::reduced {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 /// Modes asked in the first eigen-solve of an automatic count; doubled until the highest is above the target.
 constexpr int kFirstModeCount = 12;
 /// Right-hand sides of one blocked static solve (n_free x kSolveBlock doubles, twice, in memory).

@@ -539,7 +539,7 @@ std::vector<MaterialEntrySection> materials_from(const Values& values, bool gmsh
       const auto& range = values.numbers(key);
       if (!(range[0] < range[1])) {
         values.fail(key, "[low, high] with low < high",
-                    "[" + format_number(range[0]) + ", " + format_number(range[1]) + "]");
+                    list_text({range[0], range[1]}));
       }
       material.region.range[axis] = std::array<double, 2>{range[0], range[1]};
     }
@@ -740,7 +740,7 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
       if (!values.has(key)) continue;
       const auto& range = values.numbers(key);
       if (!(range[0] < range[1])) {
-        values.fail(key, "[low, high] with low < high", "[" + format_number(range[0]) + ", " + format_number(range[1]) + "]");
+        values.fail(key, "[low, high] with low < high", list_text({range[0], range[1]}));
       }
       initial.range[axis] = std::array<double, 2>{range[0], range[1]};
     }

@@ -135,11 +135,6 @@ Param text(std::string name, std::string doc) { return make(std::move(name), Kin
 
 namespace {
 
-std::string join(const std::vector<std::string>& words, const std::string& separator = ", ") {
-  std::string text;
-  for (std::size_t i = 0; i < words.size(); ++i) text += (i ? separator : "") + words[i];
-  return text;
-}
 
 std::vector<std::string> child_names(const Param& param) {
   std::vector<std::string> names;

@@ -5,11 +5,11 @@
 #include <string>
 
 #include "core/errors.hpp"
+#include "core/types.hpp"
 
 namespace crackle::spectral {
 namespace {
 
-constexpr double kTwoPi = 2.0 * M_PI;
 /// A grid point within this fraction of the grid step of a sample takes the sample itself.
 constexpr double kCoincidence = 1e-6;
 /// Relative tolerance for "1/(f dt) is an integer".
@@ -18,7 +18,6 @@ constexpr double kIntegerPeriod = 1e-9;
 /// it 8-point interpolation loses to a Hann window (measured: equal near 8.4 over 40 periods).
 constexpr double kMinSamplesToResample = 8.0;
 
-std::string num(double value) { return format_number(value); }
 
 /// Fractional part in [0, 1).
 double fraction(double x) { return x - std::floor(x); }
@@ -37,8 +36,8 @@ double raw_points_per_period(double frequency, double time_step) {
 Grid choose_grid(double frequency, double time_step) {
   const double p = raw_points_per_period(frequency, time_step);
   if (!(p < 1e9)) {
-    throw InputError("harmonics: " + num(p) + " samples per excitation period is too many (f = " +
-                     num(frequency) + " Hz, dt = " + num(time_step) + " s)");
+    throw InputError("harmonics: " + format_number(p) + " samples per excitation period is too many (f = " +
+                     format_number(frequency) + " Hz, dt = " + format_number(time_step) + " s)");
   }
   const double rounded = std::round(p);
   if (rounded >= 1.0 && std::abs(p - rounded) <= kIntegerPeriod * p) {
@@ -52,10 +51,10 @@ Grid choose_grid(double frequency, double time_step) {
 void check_options(const HarmonicOptions& options, double time_step) {
   const double f = options.excitation_frequency_hz;
   if (!(f > 0.0) || !std::isfinite(f)) {
-    throw InputError("harmonics: excitation frequency must be > 0, got " + num(f));
+    throw InputError("harmonics: excitation frequency must be > 0, got " + format_number(f));
   }
   if (!(time_step > 0.0) || !std::isfinite(time_step)) {
-    throw InputError("harmonics: time step must be > 0, got " + num(time_step));
+    throw InputError("harmonics: time step must be > 0, got " + format_number(time_step));
   }
   if (options.max_order < 1) {
     throw InputError("harmonics: max_order must be >= 1, got " + std::to_string(options.max_order));
@@ -70,8 +69,8 @@ void check_options(const HarmonicOptions& options, double time_step) {
   const double p = raw_points_per_period(f, time_step);
   if (!(2.0 * options.max_order < p)) {
     throw InputError("harmonics: order " + std::to_string(options.max_order) + " at " +
-                     num(options.max_order * f) + " Hz is not below the Nyquist frequency " +
-                     num(0.5 / time_step) + " Hz (dt = " + num(time_step) + " s)");
+                     format_number(options.max_order * f) + " Hz is not below the Nyquist frequency " +
+                     format_number(0.5 / time_step) + " Hz (dt = " + format_number(time_step) + " s)");
   }
 }
 
@@ -116,7 +115,7 @@ const Harmonic& HarmonicTable::at(double order) const {
   for (const Harmonic& h : harmonics) {
     if (h.order == order) return h;
   }
-  throw InputError("harmonic table has no order " + num(order));
+  throw InputError("harmonic table has no order " + format_number(order));
 }
 
 std::vector<double> harmonic_orders(const HarmonicOptions& options) {
@@ -139,8 +138,8 @@ double table_change(const HarmonicTable& now, const HarmonicTable& previous) {
   double largest = 0.0;
   for (std::size_t k = 0; k < now.harmonics.size(); ++k) {
     if (now.harmonics[k].order != previous.harmonics[k].order) {
-      throw InputError("table_change: order " + num(now.harmonics[k].order) + " against " +
-                       num(previous.harmonics[k].order));
+      throw InputError("table_change: order " + format_number(now.harmonics[k].order) + " against " +
+                       format_number(previous.harmonics[k].order));
     }
     largest = std::max(largest, std::abs(now.harmonics[k].complex_amplitude() -
                                          previous.harmonics[k].complex_amplitude()));
@@ -148,6 +147,28 @@ double table_change(const HarmonicTable& now, const HarmonicTable& previous) {
   if (largest == 0.0) return 0.0;
   const double a1 = now.amplitude(1.0);
   return a1 > 0.0 ? largest / a1 : std::numeric_limits<double>::infinity();
+}
+
+Eigen::MatrixXcd period_harmonics(const Eigen::MatrixXd& samples, int harmonics) {
+  const Index n = static_cast<Index>(samples.cols());
+  Eigen::MatrixXcd table = Eigen::MatrixXcd::Zero(samples.rows(), harmonics + 1);
+  for (int k = 0; k <= harmonics; ++k) {
+    Eigen::VectorXcd basis(n);
+    for (Index j = 0; j < n; ++j) basis[j] = std::polar(1.0, -kTwoPi * double(k) * double(j) / double(n));
+    table.col(k) = samples.cast<std::complex<double>>() * basis * ((k == 0 ? 1.0 : 2.0) / double(n));
+  }
+  return table;
+}
+
+double period_table_change(const Eigen::MatrixXcd& now, const Eigen::MatrixXcd& previous,
+                           const std::vector<Index>& rows, int reference) {
+  double change = 0.0;
+  for (const Index row : rows) {
+    const double a1 = std::abs(now(row, reference));
+    const double difference = (now.row(row) - previous.row(row)).cwiseAbs().maxCoeff();
+    change = std::max(change, a1 > 0.0 ? difference / a1 : (difference > 0.0 ? 1.0 : 0.0));
+  }
+  return change;
 }
 
 // ---- HarmonicAccumulator
@@ -178,19 +199,19 @@ HarmonicAccumulator::HarmonicAccumulator(const HarmonicOptions& options, double 
 
 int HarmonicAccumulator::add(double time, double value) {
   if (!std::isfinite(time) || !std::isfinite(value)) {
-    throw InputError("harmonics: sample (" + num(time) + " s, " + num(value) + ") is not finite");
+    throw InputError("harmonics: sample (" + format_number(time) + " s, " + format_number(value) + ") is not finite");
   }
   const double tolerance = kCoincidence * grid_step_;
   if (buffer_count_ == 0) {
     if (time > start_time_ + tolerance) {
-      throw InputError("harmonics: first sample at t = " + num(time) +
-                       " s comes after the start of period 0 at " + num(start_time_) + " s");
+      throw InputError("harmonics: first sample at t = " + format_number(time) +
+                       " s comes after the start of period 0 at " + format_number(start_time_) + " s");
     }
   } else {
     const double newest = buffer_time_[(buffer_head_ + kStencil - 1) % kStencil];
     if (!(time > newest)) {
-      throw InputError("harmonics: sample times must increase: " + num(time) + " s after " +
-                       num(newest) + " s");
+      throw InputError("harmonics: sample times must increase: " + format_number(time) + " s after " +
+                       format_number(newest) + " s");
     }
   }
   buffer_time_[buffer_head_] = time;
@@ -302,7 +323,7 @@ SteadyState HarmonicAccumulator::steady_state(const SteadyStateCriterion& criter
                      std::to_string(window));
   }
   if (!(criterion.tolerance > 0.0)) {
-    throw InputError("steady state: tolerance must be > 0, got " + num(criterion.tolerance));
+    throw InputError("steady state: tolerance must be > 0, got " + format_number(criterion.tolerance));
   }
   if (criterion.max_periods != 0 && criterion.max_periods < window) {
     throw InputError("steady state: max_periods must be 0 (no limit) or >= window_periods " +
@@ -351,8 +372,8 @@ HarmonicTable extract_harmonics(const std::vector<double>& values, const Samplin
   const std::int64_t periods = options.periods > 0 ? options.periods : available;
   if (periods < step || periods > available) {
     throw InputError("harmonics: the record of " + std::to_string(n) + " samples (" +
-                     num(n * dt) + " s) holds " + std::to_string(available) +
-                     " whole excitation periods of " + num(1.0 / f) + " s; " +
+                     format_number(n * dt) + " s) holds " + std::to_string(available) +
+                     " whole excitation periods of " + format_number(1.0 / f) + " s; " +
                      (options.periods > 0 ? std::to_string(options.periods) : std::to_string(step)) +
                      " needed");
   }

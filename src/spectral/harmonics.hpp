@@ -19,6 +19,7 @@
 #include <limits>
 #include <vector>
 
+#include "core/types.hpp"
 #include "spectral/window.hpp"
 
 namespace crackle::spectral {
@@ -103,6 +104,20 @@ HarmonicTable extract_harmonics(const std::vector<double>& values, const Samplin
 /// \f$\max_k |A_k^{now} - A_k^{prev}|/A_1^{now}\f$ and also catches phase drift. 0 when both
 /// tables are identical, +inf when A_1^now = 0 and they differ. InputError on different orders.
 double table_change(const HarmonicTable& now, const HarmonicTable& previous);
+
+/// Harmonic tables of exactly one period T of several signals at once (the rows of `samples`, n
+/// samples at t_j = t_0 + j T / n): columns k = 0..H, Y_0 the mean and
+/// \f$Y_k = (2/n) \sum_j y_j e^{-2\pi i k j / n}\f$, so that
+/// \f$y(t) = \mathrm{Re} \sum_k Y_k e^{2\pi i k (t - t_0) / T}\f$: the conventions above with
+/// f = 1/T and phases at t_0. A rectangular window over one whole period, so every order is an
+/// exact bin. The stepped sine's table of one period of its base frequency.
+Eigen::MatrixXcd period_harmonics(const Eigen::MatrixXd& samples, int harmonics);
+
+/// table_change() between two period tables, over the given rows, each relative to its column
+/// `reference` (A_1): the largest \f$\max_k |Y_k^{now} - Y_k^{prev}| / |Y_{ref}^{now}|\f$; a row
+/// with A_1 = 0 counts 1 when it changed, 0 when not.
+double period_table_change(const Eigen::MatrixXcd& now, const Eigen::MatrixXcd& previous,
+                           const std::vector<Index>& rows, int reference);
 
 /// When a run counts as settled: the table over the last window_periods excitation periods
 /// differs from the table over the window_periods before them by table_change() < tolerance.

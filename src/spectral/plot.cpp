@@ -3,7 +3,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -15,12 +14,6 @@
 namespace crackle::spectral {
 namespace fs = std::filesystem;
 namespace {
-
-std::string number_text(double value) {
-  char buffer[64];
-  auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-  return std::string(buffer, result.ptr);
-}
 
 std::string order_label(double order) {
   const long twice = std::lround(2.0 * order);
@@ -163,9 +156,9 @@ PlotResult plot_time_history(const fs::path& png, const std::vector<double>& val
                              const Sampling& sampling, const PlotOptions& options) {
   std::string data = "# time [s]  " + options.quantity + " [" + options.unit + "]\n";
   for (std::size_t i = 0; i < values.size(); ++i) {
-    data += number_text(sampling.start_time + static_cast<double>(i) * sampling.time_step);
+    data += shortest_text(sampling.start_time + static_cast<double>(i) * sampling.time_step);
     data += ' ';
-    data += number_text(values[i]);
+    data += shortest_text(values[i]);
     data += '\n';
   }
   const std::string body =
@@ -182,9 +175,9 @@ PlotResult plot_spectrum(const fs::path& png, const AmplitudeSpectrum& spectrum,
   std::string data = "# frequency [Hz]  amplitude [" + options.unit + "]\n";
   double largest = 0.0;
   for (std::size_t k = 0; k < spectrum.frequency_hz.size(); ++k) {
-    data += number_text(spectrum.frequency_hz[k]);
+    data += shortest_text(spectrum.frequency_hz[k]);
     data += ' ';
-    data += number_text(std::abs(spectrum.amplitude[k]));  // a log scale: bin 0 (the signed mean) by size
+    data += shortest_text(std::abs(spectrum.amplitude[k]));  // a log scale: bin 0 (the signed mean) by size
     data += '\n';
     if (std::isfinite(spectrum.amplitude[k])) largest = std::max(largest, std::abs(spectrum.amplitude[k]));
   }
@@ -196,18 +189,18 @@ PlotResult plot_spectrum(const fs::path& png, const AmplitudeSpectrum& spectrum,
     for (double order : orders) {
       if (order <= 0.0) continue;
       highest = std::max(highest, order);
-      const std::string x = number_text(order * excitation_frequency_hz);
+      const std::string x = shortest_text(order * excitation_frequency_hz);
       body += "set arrow from " + x + ", graph 0 to " + x +
               ", graph 1 nohead dashtype 2 linecolor rgb 'gray50'\n";
       body += "set label " + gnuplot_quote(order_label(order)) + " at " + x +
               ", graph 0.96 center front\n";
     }
     if (highest > 0.0) {
-      body += "set xrange [0:" + number_text((highest + 0.5) * excitation_frequency_hz) + "]\n";
+      body += "set xrange [0:" + shortest_text((highest + 0.5) * excitation_frequency_hz) + "]\n";
     }
   }
   body += "plot " + gnuplot_quote(fs::path(png).replace_extension(".dat").filename().string()) +
-          " using 1:($2 > " + number_text(floor) + " ? $2 : " + number_text(floor) +
+          " using 1:($2 > " + shortest_text(floor) + " ? $2 : " + shortest_text(floor) +
           ") with lines linewidth 1.5 notitle\n";
   return draw(png, data, body, options);
 }
@@ -218,10 +211,10 @@ PlotResult plot_ringdown_envelope(const fs::path& png, const RingdownAnalysis& a
   for (const RingdownHarmonic& harmonic : analysis.harmonics) data += " " + order_label(harmonic.order);
   data += "\n";
   for (const EnvelopeWindow& window : analysis.envelope) {
-    data += number_text(0.5 * (window.start_time + window.end_time));
+    data += shortest_text(0.5 * (window.start_time + window.end_time));
     for (double amplitude : window.amplitude) {
       data += ' ';
-      data += number_text(std::abs(amplitude));
+      data += shortest_text(std::abs(amplitude));
     }
     data += '\n';
   }
@@ -241,13 +234,13 @@ PlotResult plot_frf(const fs::path& png, const FrequencyResponse& frf, const std
                     const PlotOptions& options) {
   std::string data = "# frequency [Hz]  |H| [" + options.unit + "]  arg H [rad]\n";
   for (std::size_t k = 0; k < frf.frequency_hz.size(); ++k) {
-    data += number_text(frf.frequency_hz[k]) + ' ' + number_text(frf.magnitude[k]) + ' ' +
-            number_text(frf.phase_rad[k]) + '\n';
+    data += shortest_text(frf.frequency_hz[k]) + ' ' + shortest_text(frf.magnitude[k]) + ' ' +
+            shortest_text(frf.phase_rad[k]) + '\n';
   }
   std::string body = "set logscale y\nset xlabel 'frequency [Hz]'\nset ylabel " +
                      gnuplot_quote("|H| [" + options.unit + "]") + "\n";
   for (double f : reference_hz) {
-    const std::string x = number_text(f);
+    const std::string x = shortest_text(f);
     body += "set arrow from " + x + ", graph 0 to " + x + ", graph 1 nohead dashtype 2 linecolor rgb 'gray50'\n";
   }
   body += "plot " + gnuplot_quote(fs::path(png).replace_extension(".dat").filename().string()) +

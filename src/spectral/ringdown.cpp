@@ -7,18 +7,17 @@
 #include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
+#include "core/types.hpp"
 #include "spectral/spectrum.hpp"
 #include "spectral/window.hpp"
 
 namespace crackle::spectral {
 namespace {
 
-constexpr double kTwoPi = 2.0 * M_PI;
 constexpr int kMinPeriods = 4;
 constexpr int kMinSamplesPerPeriod = 4;  ///< of the highest order
 constexpr int kStencil = 8;              ///< Lagrange interpolation points
 
-std::string num(double value) { return format_number(value); }
 
 nlohmann::json order_json(double order) {
   if (order == std::floor(order) && std::abs(order) < 1e9) {
@@ -33,7 +32,7 @@ nlohmann::json number_or_null(double value) {
 
 void check_time_step(const char* who, double dt) {
   if (!(dt > 0.0) || !std::isfinite(dt)) {
-    throw InputError(std::string(who) + ": time step must be > 0, got " + num(dt));
+    throw InputError(std::string(who) + ": time step must be > 0, got " + format_number(dt));
   }
 }
 
@@ -162,7 +161,7 @@ const RingdownHarmonic& RingdownAnalysis::at(double order) const {
   for (const RingdownHarmonic& h : harmonics) {
     if (h.order == order) return h;
   }
-  throw InputError("ring-down analysis has no order " + num(order));
+  throw InputError("ring-down analysis has no order " + format_number(order));
 }
 
 RingdownAnalysis analyse_ringdown(const std::vector<double>& samples, const Sampling& sampling,
@@ -190,7 +189,7 @@ RingdownAnalysis analyse_ringdown(const std::vector<double>& samples, const Samp
   const std::int64_t n = n_all - first;
   if (n < 4 * kStencil) {
     throw InputError("ring-down: " + std::to_string(std::max<std::int64_t>(n, 0)) +
-                     " samples at or after start time " + num(options.start_time) +
+                     " samples at or after start time " + format_number(options.start_time) +
                      " s; at least " + std::to_string(4 * kStencil) + " needed");
   }
   if (n > (std::int64_t{1} << 27)) throw InputError("ring-down: record too long");
@@ -204,7 +203,7 @@ RingdownAnalysis analyse_ringdown(const std::vector<double>& samples, const Samp
   double spread = 0.0;
   for (std::int64_t i = 0; i < n; ++i) spread = std::max(spread, std::abs(record.values[i] - mean));
   if (!(spread > 1e-300) || spread <= 1e-14 * std::abs(mean)) {
-    throw InputError("ring-down: the record is constant (" + num(mean) + "): no oscillation");
+    throw InputError("ring-down: the record is constant (" + format_number(mean) + "): no oscillation");
   }
 
   // 1. Coarse frequency: peak of the Hann-windowed record zero-padded to >= 4n points.
@@ -236,7 +235,7 @@ RingdownAnalysis analyse_ringdown(const std::vector<double>& samples, const Samp
     if (spectrum.amplitude[k] > spectrum.amplitude[peak]) peak = k;
   }
   if (peak == lowest || !(spectrum.amplitude[peak] > 0.0)) {
-    throw InputError("ring-down: no spectral peak above 2/T = " + num(2.0 / duration) +
+    throw InputError("ring-down: no spectral peak above 2/T = " + format_number(2.0 / duration) +
                      " Hz: the record does not oscillate or holds fewer than " +
                      std::to_string(kMinPeriods) + " periods");
   }
@@ -249,8 +248,8 @@ RingdownAnalysis analyse_ringdown(const std::vector<double>& samples, const Samp
     if (curvature < 0.0) coarse += 0.5 * (left - right) / curvature * bin;
   }
   if (coarse * duration < kMinPeriods) {
-    throw InputError("ring-down: the record of " + num(duration) + " s holds " +
-                     num(coarse * duration) + " periods of its dominant frequency " + num(coarse) +
+    throw InputError("ring-down: the record of " + format_number(duration) + " s holds " +
+                     format_number(coarse * duration) + " periods of its dominant frequency " + format_number(coarse) +
                      " Hz; at least " + std::to_string(kMinPeriods) + " needed");
   }
 
@@ -261,8 +260,8 @@ RingdownAnalysis analyse_ringdown(const std::vector<double>& samples, const Samp
   const std::vector<double> orders = ringdown_orders(options);
   const double highest = orders.back() * frequency;
   if (highest * kMinSamplesPerPeriod * dt > 1.0) {
-    throw InputError("ring-down: order " + num(orders.back()) + " of " + num(frequency) +
-                     " Hz has " + num(1.0 / (highest * dt)) + " samples per period; at least " +
+    throw InputError("ring-down: order " + format_number(orders.back()) + " of " + format_number(frequency) +
+                     " Hz has " + format_number(1.0 / (highest * dt)) + " samples per period; at least " +
                      std::to_string(kMinSamplesPerPeriod) + " needed (lower max_order)");
   }
   const int step = options.subharmonics ? 2 : 1;
@@ -271,7 +270,7 @@ RingdownAnalysis analyse_ringdown(const std::vector<double>& samples, const Samp
   periods -= periods % step;
   if (periods < kMinPeriods) {
     throw InputError("ring-down: " + std::to_string(periods) + " whole periods of " +
-                     num(frequency) + " Hz in the record; at least " + std::to_string(kMinPeriods) +
+                     format_number(frequency) + " Hz in the record; at least " + std::to_string(kMinPeriods) +
                      " needed");
   }
 
@@ -408,12 +407,12 @@ FrequencyResponse estimate_frf(const std::vector<double>& response,
                      std::to_string(response.size()) + " and " + std::to_string(force.size()));
   }
   if (!(f_min <= f_max) || !std::isfinite(f_min) || !std::isfinite(f_max)) {
-    throw InputError("frequency response: needs f_min <= f_max, got " + num(f_min) + " and " +
-                     num(f_max));
+    throw InputError("frequency response: needs f_min <= f_max, got " + format_number(f_min) + " and " +
+                     format_number(f_max));
   }
   if (!(force_threshold >= 0.0 && force_threshold < 1.0)) {
     throw InputError("frequency response: force threshold must be in [0, 1), got " +
-                     num(force_threshold));
+                     format_number(force_threshold));
   }
   check_finite(who, response, "response");
   check_finite(who, force, "force");
@@ -463,8 +462,8 @@ FrequencyResponse estimate_frf(const std::vector<double>& response,
     frf.phase_rad.push_back(std::arg(h));
   }
   if (frf.frequency_hz.empty()) {
-    throw InputError("frequency response: no bin in [" + num(f_min) + ", " + num(f_max) +
-                     "] Hz where the force exceeds " + num(force_threshold) + " of its maximum");
+    throw InputError("frequency response: no bin in [" + format_number(f_min) + ", " + format_number(f_max) +
+                     "] Hz where the force exceeds " + format_number(force_threshold) + " of its maximum");
   }
   return frf;
 }
@@ -493,14 +492,14 @@ std::vector<double> frf_peaks(const FrequencyResponse& frf, double relative_thre
 
 double half_sine_pulse(double t, double start, double duration, double peak) {
   if (!(duration > 0.0))
-    throw InputError("half-sine pulse: duration must be > 0, got " + num(duration));
+    throw InputError("half-sine pulse: duration must be > 0, got " + format_number(duration));
   if (t < start || t > start + duration) return 0.0;
   return peak * std::sin(M_PI * (t - start) / duration);
 }
 
 double half_sine_pulse_spectrum(double frequency_hz, double duration, double peak) {
   if (!(duration > 0.0))
-    throw InputError("half-sine pulse: duration must be > 0, got " + num(duration));
+    throw InputError("half-sine pulse: duration must be > 0, got " + format_number(duration));
   const double u = std::abs(frequency_hz) * duration;
   const double v = 0.5 - u;
   const double sinc = v == 0.0 ? 1.0 : std::sin(M_PI * v) / (M_PI * v);

@@ -45,7 +45,6 @@ struct FftwBuffer {
   T* data;
 };
 
-std::string num(double value) { return format_number(value); }
 
 }  // namespace
 
@@ -89,8 +88,8 @@ AmplitudeSpectrum SpectrumAnalyzer::amplitude_spectrum(const std::vector<double>
                                                        const SpectrumOptions& options) const {
   const double dt = sampling.time_step;
   const double f = options.excitation_frequency_hz;
-  if (!(dt > 0.0) || !std::isfinite(dt)) throw InputError("spectrum: time step must be > 0, got " + num(dt));
-  if (!(f >= 0.0) || !std::isfinite(f)) throw InputError("spectrum: excitation frequency must be >= 0, got " + num(f));
+  if (!(dt > 0.0) || !std::isfinite(dt)) throw InputError("spectrum: time step must be > 0, got " + format_number(dt));
+  if (!(f >= 0.0) || !std::isfinite(f)) throw InputError("spectrum: excitation frequency must be >= 0, got " + format_number(f));
   if (options.periods < 0 || (options.periods > 0 && f == 0.0)) {
     throw InputError("spectrum: periods = " + std::to_string(options.periods) +
                      " needs periods >= 0 and an excitation frequency");
@@ -116,7 +115,7 @@ AmplitudeSpectrum SpectrumAnalyzer::amplitude_spectrum(const std::vector<double>
     const std::int64_t periods = options.periods > 0 ? options.periods : available;
     if (periods < step || periods > available) {
       throw InputError("spectrum: the record of " + std::to_string(n) + " samples holds " +
-                       std::to_string(available) + " whole periods of " + num(1.0 / f) + " s; " +
+                       std::to_string(available) + " whole periods of " + format_number(1.0 / f) + " s; " +
                        std::to_string(std::max<std::int64_t>(periods, step)) + " needed");
     }
     count = exact ? periods * static_cast<std::int64_t>(rounded)

@@ -25,12 +25,6 @@ constexpr std::size_t kMaxCases = 100000;
 /// Most YAML nodes of all case scenes together (cases x nodes of the scene file).
 constexpr std::size_t kMaxPlanNodes = 100000000;
 
-std::string join(const std::vector<std::string>& words, const std::string& separator = ", ") {
-  std::string text;
-  for (std::size_t i = 0; i < words.size(); ++i) text += (i ? separator : "") + words[i];
-  return text;
-}
-
 using scene::describe_node;
 using scene::is_quoted;
 using scene::parse_number;

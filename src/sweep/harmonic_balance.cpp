@@ -23,7 +23,6 @@ LinearSolver linear_solver_named(const std::string& name) {
 namespace {
 
 using Complex = std::complex<double>;
-constexpr double kPi = 3.14159265358979323846;
 /// The automatic gap scale is at least this share of the linear gap response at the drive
 /// (HarmonicBalanceOptions::scale_frequency): a floor for loads the crack barely sees statically,
 /// small enough to leave the static scale in place wherever that one is not tiny.

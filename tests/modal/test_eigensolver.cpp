@@ -21,7 +21,6 @@
 namespace crackle::modal {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kYoung = 2.0e11;
 constexpr double kDensity = 7800.0;
 

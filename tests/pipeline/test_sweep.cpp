@@ -23,7 +23,6 @@
 namespace crackle::pipeline {
 namespace {
 
-constexpr double kTwoPi = 6.283185307179586476925286766559;
 
 std::string beam_scene(const std::string& sweep, const std::string& contact = "{penalty: auto}") {
   return "mesh:\n"

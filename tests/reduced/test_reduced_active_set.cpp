@@ -24,7 +24,6 @@
 namespace crackle::reduced {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 /// The reference: the primal-dual active set on the normal rows (one row per pair), warm-started from
 /// `warm`, each new set factorised densely (the integrator's solve before 2026-12-02).

@@ -13,7 +13,6 @@
 namespace crackle::reduced {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 /// One mode, unit modal mass, no pairs, output = q.
 ReducedSystem single_mode(double omega, double zeta) {

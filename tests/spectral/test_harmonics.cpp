@@ -326,6 +326,59 @@ TEST(HarmonicAccumulator, VariableTimeStepsAreInterpolated) {
   EXPECT_LT(worst_error(accumulator.last_table(10), truth, 1.0), 1e-8);
 }
 
+TEST(PeriodTable, OnePeriodOfSeveralSignalsIsTheBatchTableWithPhasesAtItsStart) {
+  // Two signals over one period T = 2 / f (the base period of an f/2 response): column k of the
+  // period table is order k / 2 of f, with its phase at the period's start t0.
+  const auto truth = rich_content();
+  std::vector<Component> scaled = truth;
+  for (Component& c : scaled) c = {c.order, 2.5 * c.amplitude, c.order == 0.0 ? 0.0 : c.phase + 0.4};
+  const int n = 128, harmonics = 6;
+  const Sampling sampling{2.0 / (kF * n), 0.0123};
+  Eigen::MatrixXd samples(2, n);
+  for (int j = 0; j < n; ++j) {
+    const double t = sampling.start_time + j * sampling.time_step;
+    samples(0, j) = evaluate(truth, kF, t);
+    samples(1, j) = evaluate(scaled, kF, t);
+  }
+  const Eigen::MatrixXcd table = period_harmonics(samples, harmonics);
+  ASSERT_EQ(table.rows(), 2);
+  ASSERT_EQ(table.cols(), harmonics + 1);
+  HarmonicOptions options = rich_options();
+  options.periods = 2;
+  for (int row = 0; row < 2; ++row) {
+    std::vector<double> record(n);
+    for (int j = 0; j < n; ++j) record[j] = samples(row, j);
+    const HarmonicTable batch = extract_harmonics(record, sampling, options);
+    for (int k = 0; k <= harmonics; ++k) {
+      const double order = 0.5 * k;
+      const std::complex<double> at_start =
+          batch.at(order).complex_amplitude() * std::polar(1.0, 2.0 * M_PI * order * kF * sampling.start_time);
+      EXPECT_LT(std::abs(table(row, k) - at_start), 1e-12) << "row " << row << ", order " << order;
+      const std::complex<double> exact =
+          expected(row == 0 ? truth : scaled, order) * std::polar(1.0, 2.0 * M_PI * order * kF * sampling.start_time);
+      EXPECT_LT(std::abs(table(row, k) - exact), 1e-12) << "row " << row << ", order " << order;
+    }
+  }
+}
+
+TEST(PeriodTable, ChangeIsTheLargestOverTheRowsRelativeToEachRowsA1) {
+  Eigen::MatrixXcd now = Eigen::MatrixXcd::Zero(3, 3), previous = Eigen::MatrixXcd::Zero(3, 3);
+  now(0, 1) = 2.0;  // row 0: A1 = 2, its order 2 moved by 0.1
+  now(0, 2) = std::complex<double>(0.5, 0.1);
+  previous.row(0) = now.row(0);
+  previous(0, 2) = 0.5;
+  now(1, 1) = 0.5;  // row 1: A1 = 0.5, its mean moved by 0.1
+  now(1, 0) = 0.3;
+  previous.row(1) = now.row(1);
+  previous(1, 0) = 0.2;
+  EXPECT_NEAR(period_table_change(now, previous, {0}, 1), 0.1 / 2.0, 1e-15);
+  EXPECT_NEAR(period_table_change(now, previous, {0, 1}, 1), 0.1 / 0.5, 1e-15);
+  EXPECT_EQ(period_table_change(now, now, {0, 1, 2}, 1), 0.0);
+  EXPECT_EQ(period_table_change(now, previous, {2}, 1), 0.0);  // a silent row that did not change
+  previous(2, 0) = 1e-3;
+  EXPECT_EQ(period_table_change(now, previous, {2}, 1), 1.0);  // A1 = 0 and changed: counts 1
+}
+
 TEST(SteadyState, ChangeIsTheLargestComplexDifferenceOverA1) {
   HarmonicTable now, previous;
   now.harmonics = {{0, 0, 0.2, 0}, {1, kF, 2.0, 0.3}, {2, 2 * kF, 0.5, 0.0}};

@@ -24,7 +24,6 @@ namespace crackle::sweep {
 namespace {
 
 using Complex = std::complex<double>;
-constexpr double kPi = 3.14159265358979323846;
 
 /// A 1-DOF oscillator with one pair row: q'' + 2 zeta w q' + w^2 q = f a(t) + b p,
 /// g = g0 + b q + r p + rf a(t), p = k max(0, -g). The output row is q itself.
