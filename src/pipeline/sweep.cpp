@@ -2,7 +2,6 @@
 #include "pipeline/sweep.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <complex>
 #include <functional>
@@ -15,20 +14,13 @@
 #include "core/interrupt.hpp"
 #include "core/resources.hpp"
 #include "reduced/integrator.hpp"
+#include "spectral/harmonics.hpp"
 #include "sweep/branch_switching.hpp"
 
 namespace crackle::pipeline {
 namespace {
 
-constexpr double kTwoPi = 6.283185307179586476925286766559;
 constexpr double kGapScaleFactor = 30.0;  ///< gap scale of the continuation / the automatic one
-
-/// The shorter of "%g" and full precision for plot data.
-std::string number_text(double value) {
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-  return std::string(buffer, result.ptr);
-}
 
 /// "1", "2", "1/2", "3/2": an order k / nu of the excitation frequency.
 std::string order_label(int k, int nu) {
@@ -103,31 +95,6 @@ class SingleThreadedEigen {
   int threads_;
 };
 
-/// Harmonics of one base period of samples y_j at t_j = j T / n, rows x (H+1): Y_0 the mean,
-/// Y_k = (2/n) sum_j y_j e^{-2 pi i k j / n}, so that y = Re sum_k Y_k e^{ik tau}.
-sweep::ComplexMatrixX period_harmonics(const MatrixX& samples, int harmonics) {
-  const Index n = samples.cols();
-  sweep::ComplexMatrixX table = sweep::ComplexMatrixX::Zero(samples.rows(), harmonics + 1);
-  for (int k = 0; k <= harmonics; ++k) {
-    sweep::ComplexVectorX basis(n);
-    for (Index j = 0; j < n; ++j) basis[j] = std::polar(1.0, -kTwoPi * double(k) * double(j) / double(n));
-    table.col(k) = samples.cast<std::complex<double>>() * basis * ((k == 0 ? 1.0 : 2.0) / double(n));
-  }
-  return table;
-}
-
-/// Largest change of any harmonic of the probes' rows between two period tables, relative to A1.
-double table_change(const sweep::ComplexMatrixX& now, const sweep::ComplexMatrixX& before,
-                    const std::vector<SweepProbe>& probes, int nu) {
-  double change = 0.0;
-  for (const SweepProbe& probe : probes) {
-    const double a1 = std::abs(now(probe.row, nu));
-    const double difference = (now.row(probe.row) - before.row(probe.row)).cwiseAbs().maxCoeff();
-    change = std::max(change, a1 > 0.0 ? difference / a1 : (difference > 0.0 ? 1.0 : 0.0));
-  }
-  return change;
-}
-
 /// One stepped-sine frequency: from the state (q, v), periods of the base period until the table
 /// settles; leaves the final state in (q, v).
 SweepPoint stepped_sine_point(const reduced::ReducedSystem& system, const SweepSettings& settings, double frequency_hz,
@@ -147,6 +114,8 @@ SweepPoint stepped_sine_point(const reduced::ReducedSystem& system, const SweepS
   point.solution.subharmonic = nu;
   point.solution.residual = std::numeric_limits<double>::infinity();
   MatrixX samples(system.n_outputs(), n);
+  std::vector<Index> probe_rows;
+  for (const SweepProbe& probe : settings.probes) probe_rows.push_back(probe.row);
   sweep::ComplexMatrixX before;
   for (point.periods = 1; point.periods <= section.max_periods; ++point.periods) {
     poll_interrupt();
@@ -154,8 +123,10 @@ SweepPoint stepped_sine_point(const reduced::ReducedSystem& system, const SweepS
       samples.col(j) = integrator.outputs();
       integrator.step();
     }
-    sweep::ComplexMatrixX table = period_harmonics(samples, section.harmonics);
-    if (point.periods > 1) point.solution.residual = table_change(table, before, settings.probes, nu);
+    // The table of one base period (its harmonic k is order k / nu of the drive), and the probes'
+    // change from the period before (spectral's steady-state measure).
+    sweep::ComplexMatrixX table = spectral::period_harmonics(samples, section.harmonics);
+    if (point.periods > 1) point.solution.residual = spectral::period_table_change(table, before, probe_rows, nu);
     before = std::move(table);
     if (point.solution.residual <= section.tolerance) break;
   }
@@ -494,10 +465,10 @@ spectral::PlotResult plot_sweep(const std::filesystem::path& png, const SweepRes
   // scale it would pull the axis down to the round-off.
   std::string blocks[2];
   const auto row = [&](const SweepPoint& point) {
-    std::string line = number_text(point.frequency_hz());
+    std::string line = shortest_text(point.frequency_hz());
     for (int k : orders) {
       const double amplitude = amplitude_of(point, probe, k, nu);
-      line += " " + (amplitude > floor ? number_text(amplitude) : std::string("nan"));
+      line += " " + (amplitude > floor ? shortest_text(amplitude) : std::string("nan"));
     }
     return line + "\n";
   };
@@ -524,14 +495,14 @@ spectral::PlotResult plot_sweep(const std::filesystem::path& png, const SweepRes
   std::string body = "set logscale y\nset xlabel 'excitation frequency [Hz]'\nset ylabel " +
                      spectral::gnuplot_quote(options.quantity + " amplitude " + unit) + "\nset key outside right\n";
   const double low = std::min(settings.from_hz, settings.to_hz), high = std::max(settings.from_hz, settings.to_hz);
-  body += "set xrange [" + number_text(low) + ":" + number_text(high) + "]\n";
+  body += "set xrange [" + shortest_text(low) + ":" + shortest_text(high) + "]\n";
   if (settings.bilinear_hz > 0.0) {
     for (const auto& [divisor, label] : std::vector<std::pair<double, std::string>>{{2, "f_b/2"}, {3, "f_b/3"}, {1, "f_b"}, {0.5, "2 f_b"}}) {
       const double x = settings.bilinear_hz / divisor;
       if (x < low || x > high) continue;
-      body += "set arrow from " + number_text(x) + ", graph 0 to " + number_text(x) +
+      body += "set arrow from " + shortest_text(x) + ", graph 0 to " + shortest_text(x) +
               ", graph 1 nohead dashtype 3 linecolor rgb 'gray50'\n";
-      body += "set label " + spectral::gnuplot_quote(label) + " at " + number_text(x) + ", graph 0.97 center front\n";
+      body += "set label " + spectral::gnuplot_quote(label) + " at " + shortest_text(x) + ", graph 0.97 center front\n";
     }
   }
   const std::string file = spectral::gnuplot_quote(std::filesystem::path(png).replace_extension(".dat").filename().string());
