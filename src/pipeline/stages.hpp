@@ -5,6 +5,7 @@
 #include <iosfwd>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "modal/modal.hpp"
 #include "pipeline/model.hpp"
@@ -27,6 +28,10 @@ double mode_frequency(const modal::ModalResult& result, int mode, const std::str
 
 /// Rayleigh damping of transient.damping: a ratio at a frequency (or a mode of `modes`), or alpha and beta.
 transient::RayleighDamping scene_damping(const scene::Scene& scene, const std::optional<modal::ModalResult>& modes);
+
+/// The modal variants the scene needs, uncracked first (empty: no modal stage), and in `reason`
+/// what refers to a mode.
+std::vector<mesh::Variant> needed_variants(const scene::Scene& scene, std::string& reason);
 
 /// The modal stage: the variants the scene needs (a mode referred to by transient.excitation,
 /// transient.damping or sweep.frequency, or a modal: section), with modal.json etc. written to
