@@ -34,7 +34,7 @@
 
 #include "core/types.hpp"
 #include "fem/assembly.hpp"
-#include "fem/operator.hpp"
+#include "linalg/linear_operator.hpp"
 #include "mesh/mesh.hpp"
 
 namespace crackle::fem {
@@ -65,7 +65,7 @@ struct ElasticOperatorInfo {
 };
 
 /// y = K x over the DOFs of a DOF map (constraints not applied: every DOF, fixed ones included).
-class ElasticOperator final : public LinearOperator {
+class ElasticOperator final : public linalg::LinearOperator {
  public:
   ElasticOperator(const mesh::Mesh& mesh, const mesh::DofMap& dofs, const Materials& materials,
                   const ElasticOperatorOptions& options = {});

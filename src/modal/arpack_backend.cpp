@@ -11,7 +11,7 @@
 #include "core/errors.hpp"
 #include "core/interrupt.hpp"
 #include "core/resources.hpp"
-#include "modal/cholmod_factor.hpp"
+#include "linalg/cholmod_factor.hpp"
 #include "modal/eigensolver.hpp"
 
 // arpack-ng's C interface (arpack.h also declares the complex routines with C99 _Complex, which

@@ -1,7 +1,8 @@
 /// \file Modal driver: per-variant assembly and solve, open-to-uncracked mode pairing.
 #include "modal/modal.hpp"
 
-#include "modal/cholmod_factor.hpp"
+#include "linalg/cholmod_factor.hpp"
+#include "modal/stiffness_factors.hpp"
 #include "modal/cache.hpp"
 
 #include <algorithm>

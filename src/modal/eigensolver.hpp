@@ -6,7 +6,7 @@
 /// Two interchangeable backends:
 ///  - SLEPc Krylov–Schur (EPSGHEP, STSINVERT, KSPPREONLY) over PETSC_COMM_WORLD with the matrices
 ///    distributed by row ranges; sparse Cholesky by MUMPS (PCCHOLESKY) or, on one rank, by
-///    crackle's CHOLMOD factor (cholmod_factor.hpp) behind a PCSHELL with a shell ST operator;
+///    crackle's CHOLMOD factor (linalg/cholmod_factor.hpp) behind a PCSHELL with a shell ST operator;
 ///  - ARPACK dsaupd/dseupd in mode 3 (shift-invert, B = M) with a CHOLMOD factorisation of
 ///    K - sigma M, sequential (under MPI every rank solves the whole problem).
 #include <memory>
@@ -15,9 +15,13 @@
 #include "core/mpi_session.hpp"
 #include "core/types.hpp"
 
+namespace crackle::linalg {
+class CholmodFactor;
+}
+
 namespace crackle::modal {
 
-class CholmodFactor;
+using linalg::CholmodFactor;
 
 /// Eigen-solver backend.
 enum class Solver { slepc, arpack };

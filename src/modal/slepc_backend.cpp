@@ -10,7 +10,7 @@
 #include "core/errors.hpp"
 #include "core/interrupt.hpp"
 #include "core/resources.hpp"
-#include "modal/cholmod_factor.hpp"
+#include "linalg/cholmod_factor.hpp"
 #include "modal/eigensolver.hpp"
 #include "modal/petsc_check.hpp"
 
@@ -161,7 +161,7 @@ SlepcSession::~SlepcSession() {
 namespace {
 
 /// PCSHELL application y = (K - sigma M)^{-1} x with crackle's CHOLMOD factor (one rank): the
-/// node-compressed ordering of cholmod_factor.hpp, which PETSc's own CHOLMOD interface does not
+/// node-compressed ordering of linalg/cholmod_factor.hpp, which PETSc's own CHOLMOD interface does not
 /// use. Errors become PETSc error codes: nothing may unwind through PETSc's C frames.
 PetscErrorCode apply_cholmod_factor(PC pc, Vec x, Vec y) {
   void* context = nullptr;

@@ -38,7 +38,7 @@ inline constexpr int eigen_solve = 4;  ///< K, M, K - sigma M and CHOLMOD's perm
 
 /// What a command needs at least [bytes]: the mesh, the DOF maps, the lumped mass and vectors of
 /// the DOFs, and `matrices` sparse matrices of K's pattern in CSR (not counting a factor: its size
-/// is known after the symbolic analysis, where modal::CholmodFactor checks it).
+/// is known after the symbolic analysis, where linalg::CholmodFactor checks it).
 double estimate_memory_bytes(const scene::Scene& scene, const MeshEstimate& mesh, int matrices);
 
 /// Refuses (InputError naming the mesh key, the estimate and the memory available) a scene whose

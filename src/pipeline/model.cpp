@@ -9,7 +9,7 @@
 #include "fem/material.hpp"
 #include "mesh/box.hpp"
 #include "mesh/gmsh.hpp"
-#include "modal/cholmod_factor.hpp"
+#include "modal/stiffness_factors.hpp"
 #include "pipeline/limits.hpp"
 
 namespace crackle::pipeline {

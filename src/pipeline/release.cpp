@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "core/errors.hpp"
-#include "modal/cholmod_factor.hpp"
+#include "linalg/cholmod_factor.hpp"
 
 namespace crackle::pipeline {
 namespace {
@@ -62,7 +62,7 @@ StaticSolution solve_static(const fem::System& system, const VectorX& force, con
     const VectorX free_rhs = fem::free_right_hand_side(matrix, rhs, constraints);
     VectorX free_solution(n_free);
     try {
-      modal::CholmodFactor factor(free_matrix, no_mass, 0.0, "static release");
+      linalg::CholmodFactor factor(free_matrix, no_mass, 0.0, "static release");
       factor.solve(free_rhs.data(), free_solution.data());
     } catch (const SolverError& error) {
       throw SolverError(std::string(error.what()) + " (a static deflection needs boundary conditions that hold "

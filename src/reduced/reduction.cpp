@@ -14,7 +14,8 @@
 #include "core/resources.hpp"
 #include "io/files.hpp"
 #include "modal/cache.hpp"
-#include "modal/cholmod_factor.hpp"
+#include "linalg/cholmod_factor.hpp"
+#include "modal/stiffness_factors.hpp"
 #include "modal/modal.hpp"
 
 namespace crackle::reduced {
@@ -116,7 +117,7 @@ Index modes_below(const VectorX& frequencies_hz, double target_hz) {
 /// Lowest modes of (K, M): a fixed count, or every mode up to `target_hz` (solving for more as needed).
 /// `factor`: the caller's factor of K itself (a held body), which every solve then shares.
 modal::ModeSet lowest_modes(const SparseMatrix& stiffness, const SparseMatrix& mass, const ReductionOptions& options,
-                            int n_rigid, modal::CholmodFactor* factor) {
+                            int n_rigid, linalg::CholmodFactor* factor) {
   modal::ModalOptions settings;
   settings.solver = modal::Solver::arpack;
   settings.lumped_mass = true;
@@ -156,10 +157,10 @@ class StaticFlexibility {
       : mass_(mass.diagonal()),
         rigid_(rigid_shapes),
         shift_(rigid_shapes.cols() > 0 ? kShiftFraction * lowest_elastic_omega * lowest_elastic_omega : 0.0),
-        own_(std::make_unique<modal::CholmodFactor>(stiffness, mass, -shift_, "reduced model: static solve with K")),
+        own_(std::make_unique<linalg::CholmodFactor>(stiffness, mass, -shift_, "reduced model: static solve with K")),
         factor_(*own_) {}
   /// A held body with the caller's factor of K itself (shared with the eigen-solve).
-  StaticFlexibility(const SparseMatrix& mass, modal::CholmodFactor& stiffness_factor)
+  StaticFlexibility(const SparseMatrix& mass, linalg::CholmodFactor& stiffness_factor)
       : mass_(mass.diagonal()), shift_(0.0), factor_(stiffness_factor) {}
 
   /// Overwrites `block` (n_free x columns) by G_el block.
@@ -190,8 +191,8 @@ class StaticFlexibility {
   VectorX mass_;
   MatrixX rigid_;
   double shift_;
-  std::unique_ptr<modal::CholmodFactor> own_;
-  modal::CholmodFactor& factor_;
+  std::unique_ptr<linalg::CholmodFactor> own_;
+  linalg::CholmodFactor& factor_;
 };
 
 void mix(std::uint64_t& hash, const void* data, std::size_t bytes) { modal::fingerprint_mix(hash, data, bytes); }
@@ -265,7 +266,7 @@ Reduction compute_reduction(const fem::System& system, const ReductionOptions& o
   // caller's, when it has one: the modal stage's). A free body (or a held one whose K turns out
   // singular: a mechanism) factors K - sigma M per use.
   modal::StiffnessFactors own_factors;
-  modal::CholmodFactor* stiffness_factor =
+  linalg::CholmodFactor* stiffness_factor =
       n_rigid == 0 ? (factors ? factors : &own_factors)->factor(system.variant(), stiffness) : nullptr;
   const modal::ModeSet modes = lowest_modes(stiffness, mass, options, n_rigid, stiffness_factor);
   reduction.modes_s = clock.seconds();

@@ -41,25 +41,14 @@
 #include <vector>
 
 #include "core/types.hpp"
+#include "linalg/gmres.hpp"
 #include "reduced/system.hpp"
 
 namespace crackle::sweep {
 
-/// y = A x for GMRES (x and y of the same size; y is resized by the caller).
-using LinearAction = std::function<void(const VectorX& x, VectorX& y)>;
-
-/// Result of one GMRES solve.
-struct GmresReport {
-  int iterations = 0;             ///< Arnoldi steps taken (all restarts)
-  double relative_residual = 0.0; ///< ||b - A x|| / ||b|| at the end
-  bool converged = false;
-};
-
-/// Restarted GMRES with right preconditioning (the residual it monitors is the true one): solves
-/// A x = b from x (its initial guess, zero if empty) to ||b - A x|| <= tolerance ||b||, at most
-/// `max_iterations` Arnoldi steps, restarting every `restart`.
-GmresReport gmres(const LinearAction& apply, const LinearAction& precondition, const VectorX& b, VectorX& x,
-                  double tolerance, int max_iterations, int restart);
+using linalg::GmresReport;
+using linalg::LinearAction;
+using linalg::gmres;
 
 /// Relative tolerance of an inexact Newton step whose right-hand side has 2-norm `norm`: superlinear
 /// forcing min(1e-2, norm), never tighter than half the Newton `tolerance` needs (clamped to [1e-14, 0.5]).

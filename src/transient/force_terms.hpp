@@ -5,7 +5,7 @@
 /// come from the fused step sums, see TransientSolver).
 #include "fem/elastic_operator.hpp"
 #include "fem/force_term.hpp"
-#include "fem/operator.hpp"
+#include "linalg/linear_operator.hpp"
 #include "fem/system.hpp"
 #include "transient/excitation.hpp"
 
@@ -14,7 +14,7 @@ namespace crackle::transient {
 /// \f$-\beta K \dot U\f$ with K an operator (MODEL.md eq. 26), velocity at V(i-1/2).
 class StiffnessDamping final : public fem::ForceTerm {
  public:
-  StiffnessDamping(const fem::LinearOperator& stiffness, double beta)
+  StiffnessDamping(const linalg::LinearOperator& stiffness, double beta)
       : stiffness_(stiffness), beta_(beta), force_(VectorX::Zero(stiffness.n_rows())) {}
   std::string name() const override { return "damping"; }
   fem::EnergyRole role() const override { return fem::EnergyRole::dissipative; }
@@ -38,7 +38,7 @@ class StiffnessDamping final : public fem::ForceTerm {
   }
 
  private:
-  const fem::LinearOperator& stiffness_;
+  const linalg::LinearOperator& stiffness_;
   double beta_;
   VectorX force_;  ///< -beta K V(i-1/2) of the last step
   VectorX part_;   ///< add_part's share

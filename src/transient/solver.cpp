@@ -20,9 +20,9 @@ namespace crackle::transient {
 namespace {
 
 /// K plus the springs of the terms that bound the stable step (every contact spring closed).
-class StableStepOperator final : public fem::LinearOperator {
+class StableStepOperator final : public linalg::LinearOperator {
  public:
-  StableStepOperator(const fem::LinearOperator& stiffness, const std::vector<std::shared_ptr<fem::ForceTerm>>& terms,
+  StableStepOperator(const linalg::LinearOperator& stiffness, const std::vector<std::shared_ptr<fem::ForceTerm>>& terms,
                      const Distribution* distribution)
       : stiffness_(stiffness), terms_(terms), distribution_(distribution) {}
   Index n_rows() const override { return stiffness_.n_rows(); }
@@ -38,7 +38,7 @@ class StableStepOperator final : public fem::LinearOperator {
   }
 
  private:
-  const fem::LinearOperator& stiffness_;
+  const linalg::LinearOperator& stiffness_;
   const std::vector<std::shared_ptr<fem::ForceTerm>>& terms_;
   const Distribution* distribution_;
 };

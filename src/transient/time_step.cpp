@@ -14,7 +14,7 @@ double critical_time_step(double omega_max, double beta) {
   return (2.0 / omega_max) / (std::sqrt(1.0 + xi * xi) + xi);
 }
 
-TimeStepEstimate estimate_time_step(const fem::LinearOperator& stiffness, const VectorX& inverse_mass, double beta,
+TimeStepEstimate estimate_time_step(const linalg::LinearOperator& stiffness, const VectorX& inverse_mass, double beta,
                                     const TimeStepOptions& options, const Distribution* distribution) {
   if (!(options.safety_factor > 0.0 && options.safety_factor <= 1.0) || !(options.margin >= 0.0)) {
     throw InputError("time step: expected 0 < safety_factor <= 1 and margin >= 0, got safety_factor = " +

@@ -4,7 +4,7 @@
 /// \f$\xi = \beta\omega_{max}/2\f$ (Akantu getStableTimeStep).
 #include "core/defaults.hpp"
 #include "core/types.hpp"
-#include "fem/operator.hpp"
+#include "linalg/linear_operator.hpp"
 #include "transient/distribution.hpp"
 
 namespace crackle::transient {
@@ -36,7 +36,7 @@ double critical_time_step(double omega_max, double beta);
 /// With a distribution the vectors are a rank's local DOFs, `stiffness` returns completed products,
 /// the start is the same function of the global DOF and the dot products are summed over the
 /// ranks (distributed Lanczos: every rank finds the same omega_max up to summation order).
-TimeStepEstimate estimate_time_step(const fem::LinearOperator& stiffness, const VectorX& inverse_mass, double beta,
+TimeStepEstimate estimate_time_step(const linalg::LinearOperator& stiffness, const VectorX& inverse_mass, double beta,
                                     const TimeStepOptions& options = {}, const Distribution* distribution = nullptr);
 
 }  // namespace crackle::transient

@@ -14,7 +14,7 @@
 
 #include "core/errors.hpp"
 #include "core/interrupt.hpp"
-#include "modal/cholmod_factor.hpp"
+#include "linalg/cholmod_factor.hpp"
 #include "modal/eigensolver.hpp"
 #include "modal/modal.hpp"
 

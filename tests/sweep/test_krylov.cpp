@@ -1,6 +1,6 @@
 // The matrix-free harmonic balance (krylov.hpp) against the dense one on the same reduced systems
-// of many coupled crack pairs: GMRES itself, the Jacobian action and preconditioner, a breathing
-// point and a continuation branch through a super-harmonic resonance.
+// of many coupled crack pairs: the Jacobian action and preconditioner, a breathing point and a
+// continuation branch through a super-harmonic resonance (GMRES itself: tests/linalg).
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -66,30 +66,6 @@ int closing_pairs(const Solution& sol, Index c) {
   int count = 0;
   for (Index i = 0; i < c; ++i) count += sol.forces[i] > 0.0;
   return count;
-}
-
-TEST(Gmres, SolvesANonsymmetricSystemWithAndWithoutPreconditioner) {
-  const Index n = 200;
-  std::mt19937 random(1);
-  std::normal_distribution<double> normal;
-  MatrixX a = MatrixX::Identity(n, n) * 4.0;
-  for (Index i = 0; i < n; ++i)
-    for (Index j = 0; j < n; ++j) a(i, j) += normal(random) / std::sqrt(double(n));
-  VectorX b = VectorX::NullaryExpr(n, [&](Index) { return normal(random); });
-  const VectorX exact = a.partialPivLu().solve(b);
-  const LinearAction apply = [&](const VectorX& x, VectorX& y) { y = a * x; };
-  const LinearAction none = [](const VectorX& x, VectorX& y) { y = x; };
-  VectorX x;
-  const GmresReport plain = gmres(apply, none, b, x, 1e-12, 500, 30);  // restarted
-  EXPECT_TRUE(plain.converged);
-  EXPECT_LT(relative_difference(x, exact), 1e-10);
-  const MatrixX inverse = a.inverse();
-  const LinearAction exact_preconditioner = [&](const VectorX& in, VectorX& y) { y = inverse * in; };
-  x.resize(0);
-  const GmresReport preconditioned = gmres(apply, exact_preconditioner, b, x, 1e-12, 500, 30);
-  EXPECT_LE(preconditioned.iterations, 2);
-  EXPECT_LT(relative_difference(x, exact), 1e-10);
-  std::printf("  GMRES(30): %d iterations plain, %d with the exact inverse\n", plain.iterations, preconditioned.iterations);
 }
 
 TEST(Krylov, ActionAndPreconditionerOfAClosedCrack) {

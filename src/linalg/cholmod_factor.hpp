@@ -1,18 +1,17 @@
 #pragma once
 /// \file Sparse Cholesky factorisation by CHOLMOD (supernodal, BLAS-3 through the system BLAS)
 /// of the shift-invert matrix K - sigma M, with solves. Used by the ARPACK backend and by the
-/// SLEPc backend on one rank (module-internal header).
+/// SLEPc backend on one rank, by the reduced model's eigen-solves and static images and by the static
+/// release (through modal::StiffnessFactors when they share one factor of K).
 #include <cholmod.h>
 
-#include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "core/types.hpp"
-#include "mesh/mesh.hpp"
 
-namespace crackle::modal {
+namespace crackle::linalg {
 
 class CholmodFactor {
  public:
@@ -72,25 +71,4 @@ class CholmodFactor {
   std::shared_ptr<State> state_ = std::make_shared<State>();
 };
 
-/// The CHOLMOD factors of K itself (shift 0, the free DOFs of a held body) of one model's variants,
-/// made at the first use and shared by every solve on that K: the modal stage's eigen-solve, the
-/// reduced model's eigen-solves and its static images. A factor is only worth keeping while another
-/// stage will use it: the owner makes a store for the variants it keeps and drops it after.
-class StiffnessFactors {
- public:
-  /// The factor of `stiffness` (the variant's K over its free DOFs), made at the first call; null when
-  /// K is not positive definite (a free body, a mechanism) or its factor does not fit in memory: the
-  /// caller then solves on its own (shifted) terms. A K other than the one factorised (another size,
-  /// pattern or diagonal) is factorised again.
-  CholmodFactor* factor(mesh::Variant variant, const SparseMatrix& stiffness);
-
- private:
-  struct Entry {
-    Index rows = 0, nonzeros = 0;
-    double diagonal_sum = 0.0;
-    std::unique_ptr<CholmodFactor> factor;  ///< null: K could not be factorised
-  };
-  std::map<mesh::Variant, Entry> entries_;
-};
-
-}  // namespace crackle::modal
+}  // namespace crackle::linalg

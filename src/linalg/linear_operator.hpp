@@ -3,7 +3,7 @@
 /// and a matrix-free element operator are interchangeable behind `apply`.
 #include "core/types.hpp"
 
-namespace crackle::fem {
+namespace crackle::linalg {
 
 /// A square linear map y = A x over the DOFs of one DOF map.
 class LinearOperator {
@@ -32,4 +32,4 @@ class CsrOperator final : public LinearOperator {
   SparseMatrix matrix_;
 };
 
-}  // namespace crackle::fem
+}  // namespace crackle::linalg

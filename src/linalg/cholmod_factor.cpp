@@ -1,5 +1,5 @@
 /// \file CHOLMOD factorisation with a node-compressed fill-reducing ordering, and solves.
-#include "modal/cholmod_factor.hpp"
+#include "linalg/cholmod_factor.hpp"
 
 #include <algorithm>
 #include <utility>
@@ -9,7 +9,7 @@
 #include "core/interrupt.hpp"
 #include "core/resources.hpp"
 
-namespace crackle::modal {
+namespace crackle::linalg {
 
 /// Fill-reducing ordering computed on the compressed graph: consecutive rows with the same
 /// pattern (the three DOFs of a node) form one vertex. CHOLMOD's default choice (AMD, then METIS
@@ -261,26 +261,8 @@ void CholmodFactor::solve(const double* x, double* y, Index columns) {
   std::copy(values, values + rows_ * columns, y);
 }
 
-CholmodFactor* StiffnessFactors::factor(mesh::Variant variant, const SparseMatrix& stiffness) {
-  const double diagonal_sum = stiffness.diagonal().sum();
-  auto found = entries_.find(variant);
-  if (found != entries_.end() && found->second.rows == stiffness.rows() &&
-      found->second.nonzeros == stiffness.nonZeros() && found->second.diagonal_sum == diagonal_sum) {
-    return found->second.factor.get();
-  }
-  Entry entry{stiffness.rows(), stiffness.nonZeros(), diagonal_sum, nullptr};
-  entries_.erase(variant);  // the old factor goes before the new one is made
-  try {
-    const SparseMatrix no_mass;
-    entry.factor = std::make_unique<CholmodFactor>(stiffness, no_mass, 0.0, "the factor of K");
-  } catch (const SolverError&) {
-    entry.factor.reset();
-  }
-  return entries_.emplace(variant, std::move(entry)).first->second.factor.get();
-}
-
 void CholmodFactor::fail(const State& state, const std::string& context, const char* what) {
   throw SolverError(context + ": " + what + " failed (CHOLMOD status " + std::to_string(state.common.status) + ")");
 }
 
-}  // namespace crackle::modal
+}  // namespace crackle::linalg
