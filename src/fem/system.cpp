@@ -3,7 +3,9 @@
 #include <cmath>
 
 #include "core/errors.hpp"
+#include "core/fingerprint.hpp"
 #include "fem/loads.hpp"
+#include "fem/formulation_hash.hpp"
 
 namespace crackle::fem {
 
@@ -32,6 +34,36 @@ System::System(const mesh::Mesh& mesh, const Materials& materials, const std::ve
 
 System::~System() = default;
 System::System(System&&) noexcept = default;
+
+std::uint64_t System::fingerprint() const {
+  std::uint64_t hash = kFingerprintSeed;
+  const auto mix = [&hash](const void* data, std::size_t bytes) { fingerprint_mix(hash, data, bytes); };
+  const std::uint64_t formulation = CRACKLE_FORMULATION_HASH;
+  mix(&formulation, sizeof formulation);
+  const mesh::Mesh& mesh = *mesh_;
+  const std::int64_t shape[4] = {static_cast<std::int64_t>(mesh.shape), mesh.order,
+                                 static_cast<std::int64_t>(mesh.connectivity.size()), mesh.axis_aligned_bricks ? 1 : 0};
+  mix(shape, sizeof shape);
+  // The body as the variant's DOF map sees it: the coordinates of each DOF node and the DOF nodes of
+  // each element. The uncracked variant ties the crack's node copies, so its fingerprint does not
+  // depend on the crack (a study over crack sizes shares its uncracked solve), as its K does not.
+  std::vector<Vec3> coordinates(static_cast<std::size_t>(dofs_.n_dof_nodes), Vec3::Zero());
+  for (Index node = 0; node < mesh.n_nodes(); ++node) coordinates[dofs_.dof_node[node]] = mesh.nodes[node];
+  mix(coordinates.data(), sizeof(Vec3) * coordinates.size());
+  std::vector<Index> element_dof_nodes(mesh.connectivity.size());
+  for (std::size_t k = 0; k < element_dof_nodes.size(); ++k) element_dof_nodes[k] = dofs_.dof_node[mesh.connectivity[k]];
+  mix(element_dof_nodes.data(), sizeof(Index) * element_dof_nodes.size());
+  mix(mesh.element_region.data(), sizeof(int) * mesh.element_region.size());
+  for (const Material& material : *materials_) {
+    mix(&material.density, sizeof material.density);
+    mix(material.stiffness.data(), sizeof(double) * material.stiffness.size());
+  }
+  const std::int64_t layout[3] = {static_cast<std::int64_t>(variant_), dofs_.n_dof_nodes, element_shares_ ? 1 : 0};
+  mix(layout, sizeof layout);
+  mix(constraints_.fixed.data(), constraints_.fixed.size());
+  mix(constraints_.values.data(), sizeof(double) * constraints_.values.size());
+  return hash;
+}
 
 const VectorX& System::lumped_mass() const {
   if (!lazy_->lumped_mass) lazy_->lumped_mass = std::make_unique<VectorX>(assemble_lumped_mass(*mesh_, dofs_, *materials_, element_shares_));

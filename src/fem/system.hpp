@@ -4,6 +4,7 @@
 /// (as an operator, and assembled on request) and load shapes. Built once per variant and shared
 /// by every solver (modal, the full transient, the reduced model); each piece is made on first use,
 /// so a run computes only what its stages need.
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -55,6 +56,12 @@ class System {
   const mesh::DofMap& dofs() const { return dofs_; }
   const Constraints& constraints() const { return constraints_; }
   Index n_dofs() const { return dofs_.n_dofs(); }
+
+  /// A 64-bit fingerprint of everything K, M and the constraints are made from: the mesh (nodes,
+  /// elements, regions), the materials, the variant's DOF map, the constraints, and the hash of the
+  /// code that assembles them (CRACKLE_FORMULATION_HASH). Equal fingerprints give equal K, M and
+  /// free DOFs, so the file caches of modes and reduced models are keyed by it without assembling K.
+  std::uint64_t fingerprint() const;
 
   /// Lumped mass per DOF (eq. 27), all DOFs.
   const VectorX& lumped_mass() const;

@@ -5,25 +5,15 @@
 #include <sstream>
 #include <nlohmann/json.hpp>
 
+#include "core/fingerprint.hpp"
 #include "io/files.hpp"
 
 namespace crackle::modal {
 namespace {
 
-constexpr char kMagic[8] = {'C', 'R', 'K', 'M', 'O', 'D', 'E', '2'};
-
-constexpr std::uint64_t kPrime = 1099511628211ull;
+constexpr char kMagic[8] = {'C', 'R', 'K', 'M', 'O', 'D', 'E', '3'};  ///< 3: keyed by the inputs of K and M
 
 void mix(std::uint64_t& hash, const void* data, std::size_t bytes) { fingerprint_mix(hash, data, bytes); }
-
-void mix_matrix(std::uint64_t& hash, const SparseMatrix& matrix) {
-  const Index rows = static_cast<Index>(matrix.rows()), nonzeros = static_cast<Index>(matrix.nonZeros());
-  mix(hash, &rows, sizeof rows);
-  mix(hash, &nonzeros, sizeof nonzeros);
-  mix(hash, matrix.outerIndexPtr(), sizeof(Index) * (rows + 1));
-  mix(hash, matrix.innerIndexPtr(), sizeof(Index) * nonzeros);
-  mix(hash, matrix.valuePtr(), sizeof(double) * nonzeros);
-}
 
 std::filesystem::path cache_file(const std::filesystem::path& directory, std::uint64_t key) {
   char name[40];
@@ -46,27 +36,12 @@ bool get_matrix(std::istream& in, MatrixX& matrix) {
 
 }  // namespace
 
-void fingerprint_mix(std::uint64_t& hash, const void* data, std::size_t bytes) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  const std::size_t words = bytes / sizeof(std::uint64_t);
-  for (std::size_t i = 0; i < words; ++i) {
-    std::uint64_t word;
-    std::memcpy(&word, p + i * sizeof word, sizeof word);
-    hash ^= word;
-    hash *= kPrime;
-    hash ^= hash >> 32;
-  }
-  for (std::size_t i = words * sizeof(std::uint64_t); i < bytes; ++i) {
-    hash ^= p[i];
-    hash *= kPrime;
-  }
-}
-
-std::uint64_t problem_key(const SparseMatrix& stiffness, const SparseMatrix& mass, const ModalOptions& options) {
+std::uint64_t problem_key(std::uint64_t system_fingerprint, const ModalOptions& options) {
   std::uint64_t hash = kFingerprintSeed;
-  mix_matrix(hash, stiffness);
-  mix_matrix(hash, mass);
-  const std::int64_t settings[3] = {options.modes, static_cast<std::int64_t>(options.solver), options.max_iterations};
+  mix(hash, kMagic, sizeof kMagic);
+  mix(hash, &system_fingerprint, sizeof system_fingerprint);
+  const std::int64_t settings[4] = {options.modes, static_cast<std::int64_t>(options.solver), options.max_iterations,
+                                    options.lumped_mass ? 1 : 0};
   mix(hash, settings, sizeof settings);
   const double tolerances[3] = {options.tolerance, options.shift_fraction, options.rigid_tolerance};
   mix(hash, tolerances, sizeof tolerances);

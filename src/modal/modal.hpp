@@ -58,8 +58,8 @@ struct ModalOptions {
   double rigid_tolerance = 1e-6;
   MacWeighting mac = MacWeighting::mass;
   /// If not empty: each variant's solve is looked up in (and stored into) this folder, keyed by a
-  /// fingerprint of K, M and the options (modal/cache.hpp). A parameter study shares it between
-  /// cases whose body (for the open variant: body and crack) is the same.
+  /// fingerprint of what K and M are made from and of the options (modal/cache.hpp). A parameter
+  /// study shares it between cases whose body (for the open variant: body and crack) is the same.
   std::filesystem::path cache_directory;
 };
 

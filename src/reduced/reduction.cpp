@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 
 #include "core/errors.hpp"
+#include "core/fingerprint.hpp"
 #include "core/interrupt.hpp"
 #include "core/resources.hpp"
 #include "io/files.hpp"
@@ -25,8 +26,9 @@ namespace {
 constexpr int kFirstModeCount = 12;
 /// Right-hand sides of one blocked static solve (n_free x kSolveBlock doubles, twice, in memory).
 constexpr Index kSolveBlock = 32;
-/// File magic and key seed; version 3: output rows of relative points (opening probes) and frames.
-constexpr char kMagic[8] = {'C', 'R', 'K', 'R', 'E', 'D', 'U', '3'};
+/// File magic and key seed; version 4: keyed by fem::System::fingerprint (3: output rows of relative
+/// points and frames).
+constexpr char kMagic[8] = {'C', 'R', 'K', 'R', 'E', 'D', 'U', '4'};
 
 /// One pair row of B: weights over free DOFs (sparse, at most 6 entries).
 struct Row {
@@ -195,7 +197,7 @@ class StaticFlexibility {
   linalg::CholmodFactor& factor_;
 };
 
-void mix(std::uint64_t& hash, const void* data, std::size_t bytes) { modal::fingerprint_mix(hash, data, bytes); }
+void mix(std::uint64_t& hash, const void* data, std::size_t bytes) { fingerprint_mix(hash, data, bytes); }
 
 std::filesystem::path cache_file(const std::filesystem::path& directory, std::uint64_t key) {
   char name[48];
@@ -363,17 +365,11 @@ ReducedSystem reduced_system(const Reduction& reduction, Index modes, double loa
 
 std::uint64_t reduction_key(const fem::System& system, const std::vector<OutputPoint>& outputs,
                             const fem::LoadShape& load, bool friction) {
-  std::uint64_t hash = modal::kFingerprintSeed;
+  std::uint64_t hash = kFingerprintSeed;
   mix(hash, kMagic, sizeof kMagic);
-  const SparseMatrix stiffness = fem::restrict_to_free(system.assemble_stiffness(), system.constraints());
-  const Index rows = stiffness.rows(), nonzeros = stiffness.nonZeros();
-  mix(hash, &rows, sizeof rows);
-  mix(hash, &nonzeros, sizeof nonzeros);
-  mix(hash, stiffness.outerIndexPtr(), sizeof(*stiffness.outerIndexPtr()) * (rows + 1));
-  mix(hash, stiffness.innerIndexPtr(), sizeof(*stiffness.innerIndexPtr()) * nonzeros);
-  mix(hash, stiffness.valuePtr(), sizeof(double) * nonzeros);
-  const VectorX mass = fem::restrict_to_free(system.lumped_mass(), system.constraints());
-  mix(hash, mass.data(), sizeof(double) * mass.size());
+  // What K, the lumped M and the free DOFs are made from (no assembly of K for the key).
+  const std::uint64_t system_fingerprint = system.fingerprint();
+  mix(hash, &system_fingerprint, sizeof system_fingerprint);
   const int variant = static_cast<int>(system.variant());
   mix(hash, &variant, sizeof variant);
   for (const mesh::CrackPair& pair : split_pairs(system.mesh())) {

@@ -10,6 +10,7 @@
 #include "fem/assembly.hpp"
 #include "fem/kernels.hpp"
 #include "fem/loads.hpp"
+#include "fem/system.hpp"
 #include "fem_meshes.hpp"
 #include "mesh/box.hpp"
 
@@ -351,6 +352,57 @@ TEST(Assembly, BadRegionAndInvertedElementThrowInputError) {
     EXPECT_NE(std::string(error.what()).find("element 1"), std::string::npos) << error.what();
   }
   EXPECT_THROW(assemble_lumped_mass(grid.mesh, dofs, {isotropic(1.0, 0.3, 1.0)}), InputError);
+}
+
+TEST(SystemFingerprint, FollowsWhatKAndMAreMadeOfAndNotTheCrackOfTheUncrackedVariant) {
+  // The caches of modes and reduced models are keyed by System::fingerprint instead of K and M:
+  // equal fingerprints must mean equal matrices, and every input of them must change it.
+  mesh::BoxSpec box;
+  box.size = Vec3(1.0, 0.5, 0.5);
+  box.cells = {4, 2, 2};
+  box.order = 2;
+  mesh::CrackSpec shallow;
+  shallow.normal = kX;
+  shallow.at = 0.5;
+  shallow.region[kY] = {0.0, 0.5};
+  shallow.region[kZ] = {0.25, 0.5};
+  mesh::CrackSpec deep = shallow;
+  deep.region[kZ] = {0.0, 0.5};
+  const mesh::Mesh a = mesh::build_box_mesh(box, shallow), b = mesh::build_box_mesh(box, deep);
+  const mesh::Mesh a_again = mesh::build_box_mesh(box, shallow);
+  ASSERT_NE(a.n_nodes(), b.n_nodes());  // the deeper crack splits more nodes
+  const Materials steel{isotropic(210e9, 0.3, 7850.0)};
+  DirichletCondition clamp;
+  for (Index node : a.node_sets.at("x-")) clamp.nodes.push_back(node);
+  clamp.components = {0, 1, 2};
+  clamp.values = {0.0, 0.0, 0.0};
+  clamp.source = "clamp";
+  const std::vector<DirichletCondition> held{clamp};
+  const auto fingerprint = [&](const mesh::Mesh& mesh, const Materials& materials, mesh::Variant variant,
+                               const std::vector<DirichletCondition>& conditions) {
+    return System(mesh, materials, conditions, variant).fingerprint();
+  };
+  const auto uncracked = mesh::Variant::uncracked, open = mesh::Variant::open;
+  EXPECT_EQ(fingerprint(a, steel, open, held), fingerprint(a_again, steel, open, held));
+  // The uncracked variant ties the crack faces: the same K and the same fingerprint for any crack.
+  EXPECT_EQ(fingerprint(a, steel, uncracked, held), fingerprint(b, steel, uncracked, held));
+  const System tied_a(a, steel, held, uncracked), tied_b(b, steel, held, uncracked);
+  EXPECT_EQ(max_abs(tied_a.assemble_stiffness() - tied_b.assemble_stiffness()), 0.0);
+  // What changes K, M or the free DOFs changes it.
+  EXPECT_NE(fingerprint(a, steel, open, held), fingerprint(b, steel, open, held));
+  EXPECT_NE(fingerprint(a, steel, uncracked, held), fingerprint(a, steel, open, held));
+  EXPECT_NE(fingerprint(a, steel, open, held), fingerprint(a, steel, open, {}));
+  EXPECT_NE(fingerprint(a, steel, open, held), fingerprint(a, {isotropic(210e9, 0.3, 7851.0)}, open, held));
+  EXPECT_NE(fingerprint(a, steel, open, held), fingerprint(a, {isotropic(210e9, 0.29, 7850.0)}, open, held));
+  mesh::BoxSpec longer = box;
+  longer.size[0] = 1.0 + 1e-12;
+  EXPECT_NE(fingerprint(a, steel, open, held), fingerprint(mesh::build_box_mesh(longer, shallow), steel, open, held));
+  mesh::BoxSpec higher = box;
+  higher.order = 3;
+  const mesh::Mesh p3 = mesh::build_box_mesh(higher, shallow);
+  DirichletCondition clamp3 = clamp;
+  clamp3.nodes = p3.node_sets.at("x-");
+  EXPECT_NE(fingerprint(a, steel, open, held), fingerprint(p3, steel, open, {clamp3}));
 }
 
 }  // namespace
