@@ -25,7 +25,7 @@
 #include "scene/scene.hpp"
 #include "scene/schema.hpp"
 #include "scene/yaml_text.hpp"
-#include "spectral/plot.hpp"
+#include "plot/gnuplot.hpp"
 #include "transient/damping.hpp"
 #include "study/plan.hpp"
 #include "study/study.hpp"
@@ -287,8 +287,8 @@ std::string measurement_label(const Measurement& m) {
 /// 95 % joint region (the Gauss-Newton ellipse). Never throws: returns a note on failure.
 std::string plot_map(const fs::path& dir, const IdentifySpec& spec, const std::vector<std::vector<double>>& axes,
                      const std::vector<double>& chi2, const std::vector<Fitted>& minima, const Fitted& best) {
-  spectral::PlotOptions probe;
-  if (!spectral::gnuplot_available(probe)) return "gnuplot not found: no plots";
+  plot::PlotOptions probe;
+  if (!plot::gnuplot_available(probe)) return "gnuplot not found: no plots";
   std::ostringstream data, marks, region, script;
   const std::size_t k = axes.size();
   const std::size_t n1 = k > 1 ? axes[1].size() : 1;
@@ -316,11 +316,11 @@ std::string plot_map(const fs::path& dir, const IdentifySpec& spec, const std::v
   io::write_file_atomic(dir / "identify_region.dat", region.str());
   script << "# gnuplot script written by crackle identify; run: gnuplot identify_map.gp\n"
          << "set terminal pngcairo size 900,700 noenhanced\nset output 'identify_map.png'\n";
-  script << "set xlabel " << spectral::gnuplot_quote(spec.unknowns[0].key) << "\n"
+  script << "set xlabel " << plot::gnuplot_quote(spec.unknowns[0].key) << "\n"
          << "set xrange [" << spec.unknowns[0].lower << ":" << spec.unknowns[0].upper << "]\n";
   if (k > 1) script << "set yrange [" << spec.unknowns[1].lower << ":" << spec.unknowns[1].upper << "]\n";
   if (k > 1) {
-    script << "set ylabel " << spectral::gnuplot_quote(spec.unknowns[1].key) << "\n"
+    script << "set ylabel " << plot::gnuplot_quote(spec.unknowns[1].key) << "\n"
            << "set title 'misfit log10(chi^2), the minima (circles) and the 95 % region of the estimate'\n"
            << "set view map\nset pm3d map interpolate 4,4\nset palette rgb 33,13,10\n"
            << "splot 'identify_map.dat' using 1:2:3 with pm3d notitle, "
@@ -331,13 +331,13 @@ std::string plot_map(const fs::path& dir, const IdentifySpec& spec, const std::v
            << "'identify_minima.dat' using 1:(log10($2)) with points pt 7 ps 1.5 title 'minima'\n";
   }
   io::write_file_atomic(dir / "identify_map.gp", script.str());
-  const spectral::PlotResult drawn = spectral::run_gnuplot(dir / "identify_map.png", dir / "identify_map.gp", probe);
+  const plot::PlotResult drawn = plot::run_gnuplot(dir / "identify_map.png", dir / "identify_map.gp", probe);
   return drawn.written ? "" : drawn.note;
 }
 
 std::string plot_fit(const fs::path& dir, const IdentifySpec& spec, const Fitted& best, const VectorX& weights) {
-  spectral::PlotOptions probe;
-  if (!spectral::gnuplot_available(probe)) return "gnuplot not found: no plots";
+  plot::PlotOptions probe;
+  if (!plot::gnuplot_available(probe)) return "gnuplot not found: no plots";
   std::ostringstream data;
   data << "# index measured sigma model weight(sqrt(sigma^2+eps^2)) label\n";
   for (std::size_t i = 0; i < spec.measured.size(); ++i) {
@@ -345,14 +345,14 @@ std::string plot_fit(const fs::path& dir, const IdentifySpec& spec, const Fitted
     data << i + 1 << " " << m.value << " " << m.sigma << " " << best.model[static_cast<Eigen::Index>(i)] << " "
          << weights[static_cast<Eigen::Index>(i)] << " \"" << measurement_label(m) << "\"\n";
   }
-  spectral::PlotOptions options;
+  plot::PlotOptions options;
   options.title = "measured (sigma bars) against fitted (model-error bars), normalised by the measured value";
   options.width = 900;
   const std::string body =
       "set ylabel 'value / measured [-]'\nset xtics rotate by -30\nset offsets 0.5,0.5,0,0\n"
       "plot 'identify_fit.dat' using 1:(1):($3/$2):xtic(6) with yerrorbars pt 7 title 'measured', "
       "'' using ($1+0.1):($4/$2):($5/$2) with yerrorbars pt 5 title 'fitted'\n";
-  const spectral::PlotResult drawn = spectral::plot_script(dir / "identify_fit.png", data.str(), body, options);
+  const plot::PlotResult drawn = plot::plot_script(dir / "identify_fit.png", data.str(), body, options);
   return drawn.written ? "" : drawn.note;
 }
 

@@ -92,7 +92,7 @@ nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::file
   nlohmann::json probes_json = nlohmann::json::object();
   const spectral::Sampling sampling{dt, 0.0};  // every step, from t = 0
   spectral::SpectrumAnalyzer analyzer;
-  spectral::PlotOptions plot;
+  plot::PlotOptions plot;
   for (std::size_t p = 0; p < probes_.size(); ++p) {
     const ProbeSpectrum& probe = probes_[p];
     const spectral::HarmonicAccumulator& accumulator = monitor_.accumulator(p);
@@ -233,7 +233,7 @@ void write_ringdown_spectrum(const scene::Scene& scene, const std::filesystem::p
   options.window_periods = spectrum.ringdown_window_periods + (spectrum.subharmonics && spectrum.ringdown_window_periods % 2);
   options.start_time = spectrum.ringdown_start.value_or(pulse ? excitation->duration : 0.0);
   nlohmann::json probes_json = nlohmann::json::object();
-  spectral::PlotOptions plot;
+  plot::PlotOptions plot;
   for (std::size_t p = 0; p < section.probes.size(); ++p) {
     const scene::ProbeSection& probe = section.probes[p];
     const int component = analysed_component(probe, default_component);
@@ -274,7 +274,7 @@ void write_ringdown_spectrum(const scene::Scene& scene, const std::filesystem::p
         if (variant) {
           for (int i = 0; i < variant->modes.n_modes(); ++i) reference.push_back(variant->modes.frequencies_hz[i]);
         }
-        spectral::PlotOptions frf_plot = plot;
+        plot::PlotOptions frf_plot = plot;
         frf_plot.title = probe.name + ": H = " + quantity + " / F_" + axis_name(excitation->direction);
         frf_plot.unit = "m/N";
         spectral::plot_frf(directory / ("frf_" + probe.name + ".png"), *frf, reference, frf_plot);

@@ -21,7 +21,7 @@
 #include "io/csv.hpp"
 #include "reduced/system.hpp"
 #include "scene/scene.hpp"
-#include "spectral/plot.hpp"
+#include "plot/gnuplot.hpp"
 #include "sweep/harmonic_balance.hpp"
 
 namespace crackle::pipeline {
@@ -106,9 +106,9 @@ nlohmann::json sweep_json(const SweepResult& result, const SweepSettings& settin
 
 /// Response curve of one probe: A1, A2, A3 (and A1/2 with subharmonic 2) against frequency, log y,
 /// unstable parts dashed, f_b/2, f_b/3 and f_b marked when known.
-spectral::PlotResult plot_sweep(const std::filesystem::path& png, const SweepResult& result,
+plot::PlotResult plot_sweep(const std::filesystem::path& png, const SweepResult& result,
                                 const SweepSettings& settings, std::size_t probe,
-                                const spectral::PlotOptions& options = spectral::PlotOptions());
+                                const plot::PlotOptions& options = plot::PlotOptions());
 
 struct SweepCommandOptions {
   std::string scene_path;

@@ -60,10 +60,10 @@ void write_outputs(const fs::path& directory, const SweepResult& result, const S
   io::write_csv(directory / "sweep.csv", sweep_table(result, settings));
   if (!settings.section.plots) return;
   for (std::size_t p = 0; p < settings.probes.size(); ++p) {
-    spectral::PlotOptions plot;
+    plot::PlotOptions plot;
     plot.title = settings.probes[p].name + " u_" + axis_name(settings.probes[p].component) + ", " +
                  settings.section.method;
-    const spectral::PlotResult drawn = plot_sweep(directory / ("sweep_" + settings.probes[p].name + ".png"), result,
+    const plot::PlotResult drawn = plot_sweep(directory / ("sweep_" + settings.probes[p].name + ".png"), result,
                                                   settings, p, plot);
     if (!drawn.written) out << "note: no plot (" << drawn.note << ")\n";
   }

@@ -147,9 +147,9 @@ nlohmann::json sweep_json(const SweepResult& result, const SweepSettings& settin
   return document;
 }
 
-spectral::PlotResult plot_sweep(const std::filesystem::path& png, const SweepResult& result,
+plot::PlotResult plot_sweep(const std::filesystem::path& png, const SweepResult& result,
                                 const SweepSettings& settings, std::size_t probe_index,
-                                const spectral::PlotOptions& options) {
+                                const plot::PlotOptions& options) {
   const SweepProbe& probe = settings.probes.at(probe_index);
   const int nu = settings.section.subharmonic;
   std::vector<int> orders = {nu, 2 * nu, 3 * nu};  // A1, A2, A3 as k of the base frequency
@@ -190,7 +190,7 @@ spectral::PlotResult plot_sweep(const std::filesystem::path& png, const SweepRes
                      "; block 0 stable, block 1 unstable\n" + (blocks[0].empty() ? empty_row : blocks[0]) + "\n\n" +
                      (blocks[1].empty() ? empty_row : blocks[1]);
   std::string body = "set logscale y\nset xlabel 'excitation frequency [Hz]'\nset ylabel " +
-                     spectral::gnuplot_quote(options.quantity + " amplitude " + unit) + "\nset key outside right\n";
+                     plot::gnuplot_quote(options.quantity + " amplitude " + unit) + "\nset key outside right\n";
   const double low = std::min(settings.from_hz, settings.to_hz), high = std::max(settings.from_hz, settings.to_hz);
   body += "set xrange [" + shortest_text(low) + ":" + shortest_text(high) + "]\n";
   if (settings.bilinear_hz > 0.0) {
@@ -199,10 +199,10 @@ spectral::PlotResult plot_sweep(const std::filesystem::path& png, const SweepRes
       if (x < low || x > high) continue;
       body += "set arrow from " + shortest_text(x) + ", graph 0 to " + shortest_text(x) +
               ", graph 1 nohead dashtype 3 linecolor rgb 'gray50'\n";
-      body += "set label " + spectral::gnuplot_quote(label) + " at " + shortest_text(x) + ", graph 0.97 center front\n";
+      body += "set label " + plot::gnuplot_quote(label) + " at " + shortest_text(x) + ", graph 0.97 center front\n";
     }
   }
-  const std::string file = spectral::gnuplot_quote(std::filesystem::path(png).replace_extension(".dat").filename().string());
+  const std::string file = plot::gnuplot_quote(std::filesystem::path(png).replace_extension(".dat").filename().string());
   const char* names[] = {"A1", "A2", "A3", "A1/2"};
   const char* colours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd"};
   std::string plots;
@@ -211,7 +211,7 @@ spectral::PlotResult plot_sweep(const std::filesystem::path& png, const SweepRes
     plots += std::string(plots.empty() ? "plot " : ", \\\n     ") + file + " index 0" + style + " title '" + names[c] + "'";
     if (!blocks[1].empty()) plots += ", \\\n     " + file + " index 1" + style + " dashtype 2 title '" + names[c] + " unstable'";
   }
-  return spectral::plot_script(png, data, body + plots + "\n", options);
+  return plot::plot_script(png, data, body + plots + "\n", options);
 }
 
 

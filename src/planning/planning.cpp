@@ -20,7 +20,7 @@
 #include "scene/scene.hpp"
 #include "scene/schema.hpp"
 #include "scene/yaml_text.hpp"
-#include "spectral/plot.hpp"
+#include "plot/gnuplot.hpp"
 #include "study/plot.hpp"
 
 namespace crackle::planning {
@@ -126,7 +126,7 @@ std::string plot_face_maps(const fs::path& dir, const PlanSpec& spec, const std:
       data << "\n";
     }
     data << "\n";
-    plots << "set title " << spectral::gnuplot_quote(title) << "\nsplot 'plan_map.dat' index " << shown
+    plots << "set title " << plot::gnuplot_quote(title) << "\nsplot 'plan_map.dat' index " << shown
           << " using 1:2:3 with pm3d notitle\n";
     ++shown;
   }
@@ -137,17 +137,17 @@ std::string plot_face_maps(const fs::path& dir, const PlanSpec& spec, const std:
     for (int c = 0; c < 2; ++c) extent[c] = std::max(extent[c], std::abs(x[c == 0 ? u : v] - spec.sensors[0][c == 0 ? u : v]));
   const bool long_face = extent[0] > 3.0 * extent[1] || extent[1] > 3.0 * extent[0];
   const int columns = long_face ? 1 : std::min(shown, 3), rows = (shown + columns - 1) / columns;
-  spectral::PlotOptions options;
+  plot::PlotOptions options;
   options.width = long_face ? 1000 : 440 * columns;
   options.height = (long_face ? 230 : 400) * rows + 40;
   std::ostringstream body;  // the panels carry their own titles; the figure's is the multiplot's
   body << "unset grid\nset view map\nset pm3d map\nset palette rgb 33,13,10\n"
        << "set xlabel '" << static_cast<char>('x' + u) << " [m]'\nset ylabel '" << static_cast<char>('x' + v)
        << " [m]'\n" << (long_face ? "" : "set size ratio -1\n") << "set multiplot layout " << rows << "," << columns
-       << " title " << spectral::gnuplot_quote(figure + " over the sensor face " + spec.face +
+       << " title " << plot::gnuplot_quote(figure + " over the sensor face " + spec.face +
                                                " (colour), per drive point and frequency")
        << "\n" << plots.str() << "unset multiplot\n";
-  const spectral::PlotResult drawn = spectral::plot_script(dir / "plan_map.png", data.str(), body.str(), options);
+  const plot::PlotResult drawn = plot::plot_script(dir / "plan_map.png", data.str(), body.str(), options);
   return drawn.written ? "" : drawn.note;
 }
 

@@ -1,5 +1,6 @@
 #pragma once
-/// \file PNG plots of time histories and amplitude spectra, drawn by gnuplot.
+/// \file PNG plots of time histories, amplitude spectra, ring-down envelopes and FRFs, drawn by
+/// gnuplot through plot/gnuplot.hpp.
 /// Each plot writes three files side by side: `<name>.dat` (the data, with units in a
 /// comment line), `<name>.gp` (a gnuplot script that reads the data by file name, so the
 /// folder can be moved and re-plotted) and `<name>.png`. Plotting never throws: a missing
@@ -8,37 +9,15 @@
 #include <string>
 #include <vector>
 
+#include "plot/gnuplot.hpp"
 #include "spectral/harmonics.hpp"
 #include "spectral/ringdown.hpp"
 #include "spectral/spectrum.hpp"
 
 namespace crackle::spectral {
 
-/// Labels and the gnuplot to use.
-struct PlotOptions {
-  std::string title;                    ///< plot title (may be empty)
-  std::string quantity = "displacement";  ///< what the signal is, for the y label
-  std::string unit = "m";               ///< unit of the signal
-  std::string gnuplot = "gnuplot";      ///< executable: a name looked up in PATH, or a path
-  int width = 1000, height = 600;       ///< the PNG's size [pixels]
-};
-
-/// Outcome of a plot.
-struct PlotResult {
-  bool written = false;  ///< the PNG exists and is not empty
-  std::string note;      ///< why not, or gnuplot's messages
-  std::filesystem::path data, script, png;
-};
-
-/// A word quoted for the POSIX shell.
-std::string shell_quote(const std::string& text);
-/// A gnuplot single-quoted string (no escapes inside except '' for ').
-std::string gnuplot_quote(const std::string& text);
-/// Full path of an executable (a path, or a bare name looked up in PATH), or empty.
-std::filesystem::path find_executable(const std::string& name);
-
-/// Whether the gnuplot of the options can be found (PATH lookup for a bare name).
-bool gnuplot_available(const PlotOptions& options);
+using plot::PlotOptions;
+using plot::PlotResult;
 
 /// (a) Time history x(t_i), t_i = start_time + i dt, as lines: time [s] vs quantity [unit].
 PlotResult plot_time_history(const std::filesystem::path& png, const std::vector<double>& values,
@@ -63,16 +42,5 @@ PlotResult plot_ringdown_envelope(const std::filesystem::path& png, const Ringdo
 /// unit of H (e.g. "m/N").
 PlotResult plot_frf(const std::filesystem::path& png, const FrequencyResponse& frf,
                     const std::vector<double>& reference_hz, const PlotOptions& options);
-
-/// Runs gnuplot on `script`, already written in the PNG's folder and drawing `png` there (the
-/// folder is gnuplot's working directory), and checks the PNG. For figures of several data files;
-/// the others are plot_script's.
-PlotResult run_gnuplot(const std::filesystem::path& png, const std::filesystem::path& script,
-                       const PlotOptions& options);
-
-/// Any plot: writes `data` as `<name>.dat` and a script of `script_body` (after the terminal,
-/// output, title and grid lines) as `<name>.gp`, and runs gnuplot in the PNG's folder.
-PlotResult plot_script(const std::filesystem::path& png, const std::string& data, const std::string& script_body,
-                       const PlotOptions& options);
 
 }  // namespace crackle::spectral

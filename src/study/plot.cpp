@@ -14,13 +14,13 @@
 #include <set>
 #include <sstream>
 
-#include "spectral/plot.hpp"
+#include "plot/gnuplot.hpp"
 
 namespace crackle::study {
 namespace fs = std::filesystem;
-using spectral::find_executable;
-using spectral::gnuplot_quote;
-using spectral::shell_quote;
+using plot::find_executable;
+using plot::gnuplot_quote;
+using plot::shell_quote;
 namespace {
 
 bool write_text(const fs::path& path, const std::string& text) {

@@ -411,9 +411,9 @@ TEST(SweepFiles, TableJsonAndPlot) {
   EXPECT_EQ(document["settings"]["harmonics"], 6);
   const std::filesystem::path folder = std::filesystem::temp_directory_path() / "crackle-sweep-plot";
   std::filesystem::create_directories(folder);
-  const spectral::PlotResult plot = plot_sweep(folder / "sweep_a.png", result, settings, 0);
+  const plot::PlotResult drawn = plot_sweep(folder / "sweep_a.png", result, settings, 0);
   EXPECT_TRUE(std::filesystem::exists(folder / "sweep_a.dat"));
-  if (spectral::gnuplot_available(spectral::PlotOptions())) EXPECT_TRUE(plot.written) << plot.note;
+  if (plot::gnuplot_available(plot::PlotOptions())) EXPECT_TRUE(drawn.written) << drawn.note;
 }
 
 }  // namespace
