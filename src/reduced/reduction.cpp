@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
-#include <fstream>
 #include <memory>
 #include <optional>
 
@@ -13,7 +11,7 @@
 #include "core/fingerprint.hpp"
 #include "core/interrupt.hpp"
 #include "core/resources.hpp"
-#include "io/files.hpp"
+#include "io/cache_file.hpp"
 #include "modal/cache.hpp"
 #include "linalg/cholmod_factor.hpp"
 #include "modal/stiffness_factors.hpp"
@@ -29,6 +27,7 @@ constexpr Index kSolveBlock = 32;
 /// File magic and key seed; version 4: keyed by fem::System::fingerprint (3: output rows of relative
 /// points and frames).
 constexpr char kMagic[8] = {'C', 'R', 'K', 'R', 'E', 'D', 'U', '4'};
+const std::string kCachePrefix = "reduction";
 
 /// One pair row of B: weights over free DOFs (sparse, at most 6 entries).
 struct Row {
@@ -198,27 +197,6 @@ class StaticFlexibility {
 };
 
 void mix(std::uint64_t& hash, const void* data, std::size_t bytes) { fingerprint_mix(hash, data, bytes); }
-
-std::filesystem::path cache_file(const std::filesystem::path& directory, std::uint64_t key) {
-  char name[48];
-  std::snprintf(name, sizeof name, "reduction-%016llx.bin", static_cast<unsigned long long>(key));
-  return directory / name;
-}
-
-void put(std::string& out, const MatrixX& matrix) {
-  const std::int64_t size[2] = {matrix.rows(), matrix.cols()};
-  out.append(reinterpret_cast<const char*>(size), sizeof size);
-  out.append(reinterpret_cast<const char*>(matrix.data()), sizeof(double) * matrix.size());
-}
-
-template <typename Dense>
-bool get(std::istream& in, Dense& matrix) {
-  std::int64_t size[2];
-  if (!in.read(reinterpret_cast<char*>(size), sizeof size) || size[0] < 0 || size[1] < 0) return false;
-  if (Dense::ColsAtCompileTime == 1 && size[1] != 1) return false;
-  matrix.resize(size[0], size[1]);
-  return static_cast<bool>(in.read(reinterpret_cast<char*>(matrix.data()), sizeof(double) * matrix.size()));
-}
 
 }  // namespace
 
@@ -393,23 +371,19 @@ std::uint64_t reduction_key(const fem::System& system, const std::vector<OutputP
 }
 
 std::optional<Reduction> load_cached_reduction(const std::filesystem::path& directory, std::uint64_t key) {
-  std::ifstream in(cache_file(directory, key), std::ios::binary);
-  if (!in) return std::nullopt;
-  char magic[sizeof kMagic];
-  std::uint64_t stored_key = 0;
-  if (!in.read(magic, sizeof magic) || std::memcmp(magic, kMagic, sizeof magic) != 0) return std::nullopt;
-  if (!in.read(reinterpret_cast<char*>(&stored_key), sizeof stored_key) || stored_key != key) return std::nullopt;
+  io::CacheReader in(directory, kCachePrefix, kMagic, key);
   Reduction reduction;
   char friction = 0;
   double times[2] = {0.0, 0.0};
-  if (!in.read(&friction, 1) || !in.read(reinterpret_cast<char*>(times), sizeof times)) return std::nullopt;
+  if (!in.get(friction) || !in.get(times)) return std::nullopt;
   reduction.friction = friction != 0;
   reduction.modes_s = times[0];
   reduction.flexibility_s = times[1];
-  if (!get(in, reduction.omega) || !get(in, reduction.pair_modes) || !get(in, reduction.output_modes) ||
-      !get(in, reduction.load_modal) || !get(in, reduction.pair_static) || !get(in, reduction.output_static) ||
-      !get(in, reduction.pair_static_load) || !get(in, reduction.output_static_load) ||
-      !get(in, reduction.pair_area) || !get(in, reduction.shapes) || !get(in, reduction.mass)) {
+  if (!in.get_matrix(reduction.omega) || !in.get_matrix(reduction.pair_modes) || !in.get_matrix(reduction.output_modes) ||
+      !in.get_matrix(reduction.load_modal) || !in.get_matrix(reduction.pair_static) ||
+      !in.get_matrix(reduction.output_static) || !in.get_matrix(reduction.pair_static_load) ||
+      !in.get_matrix(reduction.output_static_load) || !in.get_matrix(reduction.pair_area) ||
+      !in.get_matrix(reduction.shapes) || !in.get_matrix(reduction.mass)) {
     return std::nullopt;
   }
   const Index m = reduction.omega.size(), c = reduction.pair_static.rows(), o = reduction.output_static.rows();
@@ -424,20 +398,18 @@ std::optional<Reduction> load_cached_reduction(const std::filesystem::path& dire
 }
 
 void store_cached_reduction(const std::filesystem::path& directory, std::uint64_t key, const Reduction& reduction) {
-  io::ensure_directory(directory);
-  std::string out(kMagic, sizeof kMagic);
-  out.append(reinterpret_cast<const char*>(&key), sizeof key);
-  out.push_back(reduction.friction ? 1 : 0);
+  io::CacheWriter out(kMagic, key);
+  out.put(static_cast<char>(reduction.friction ? 1 : 0));
   const double times[2] = {reduction.modes_s, reduction.flexibility_s};
-  out.append(reinterpret_cast<const char*>(times), sizeof times);
+  out.put(times);
   for (const MatrixX& matrix :
        {MatrixX(reduction.omega), reduction.pair_modes, reduction.output_modes, MatrixX(reduction.load_modal),
         reduction.pair_static, reduction.output_static, MatrixX(reduction.pair_static_load),
         MatrixX(reduction.output_static_load), MatrixX(reduction.pair_area), reduction.shapes,
         MatrixX(reduction.mass)}) {
-    put(out, matrix);
+    out.put_matrix(matrix);
   }
-  io::write_file_atomic(cache_file(directory, key), out);
+  out.store(directory, kCachePrefix);
 }
 
 }  // namespace crackle::reduced
