@@ -12,6 +12,7 @@
 
 #include "core/errors.hpp"
 #include "core/interrupt.hpp"
+#include "fem/colouring.hpp"
 #include "fem/element_basis.hpp"
 
 namespace crackle::fem {
@@ -164,29 +165,17 @@ NodeGraph build_graph(const mesh::Mesh& mesh, const mesh::DofMap& dofs, bool wit
 }
 
 std::vector<std::vector<Index>> colour(const NodeGraph& graph) {
-  // Greedy: each element takes the smallest colour that no element sharing a DOF node has yet.
+  // Elements sharing a DOF node get different colours.
   const int npe = graph.nodes_per_element;
-  std::vector<int> colours(graph.n_elements, -1);
-  std::vector<Index> forbidden;  // forbidden[c] == e: colour c is taken by a neighbour of e
-  std::vector<std::vector<Index>> classes;
-  for (Index e = 0; e < graph.n_elements; ++e) {
-    const Index* nodes = &graph.element_dof_nodes[static_cast<std::size_t>(e) * npe];
-    for (int a = 0; a < npe; ++a) {
-      for (std::int64_t i = graph.element_start[nodes[a]]; i < graph.element_start[nodes[a] + 1]; ++i) {
-        const int c = colours[graph.elements[i]];
-        if (c >= 0) forbidden[c] = e;
-      }
-    }
-    int c = 0;
-    while (c < static_cast<int>(forbidden.size()) && forbidden[c] == e) ++c;
-    if (c == static_cast<int>(forbidden.size())) {
-      forbidden.push_back(-1);
-      classes.emplace_back();
-    }
-    colours[e] = c;
-    classes[c].push_back(e);
-  }
-  return classes;
+  return greedy_colouring(
+      graph.n_elements, graph.n_dof_nodes,
+      [&](Index e, auto&& visit) {
+        const Index* nodes = &graph.element_dof_nodes[static_cast<std::size_t>(e) * npe];
+        for (int a = 0; a < npe; ++a) visit(nodes[a]);
+      },
+      [&](Index node, auto&& visit) {
+        for (std::int64_t i = graph.element_start[node]; i < graph.element_start[node + 1]; ++i) visit(graph.elements[i]);
+      });
 }
 
 /// Empty CSR matrix with the pattern of the graph: full 3x3 node blocks (`block`, stiffness) or

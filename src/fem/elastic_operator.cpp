@@ -11,6 +11,7 @@
 
 #include "core/errors.hpp"
 #include "core/quadrature.hpp"
+#include "fem/colouring.hpp"
 #include "fem/element.hpp"
 
 namespace crackle::fem {
@@ -717,28 +718,17 @@ ElasticOperator::ElasticOperator(const mesh::Mesh& mesh, const mesh::DofMap& dof
           chunks_of[next[node]++] = c;
         }
       }
-    std::vector<int> colour(n_chunks, -1);
-    std::fill(last.begin(), last.end(), -1);  // now: last chunk that visited the node
-    std::vector<Index> stamp;  // stamp[colour] == c: colour used by a neighbour of chunk c
-    for (Index c = 0; c < n_chunks; ++c) {
-      for (std::size_t i = impl.chunk_begin[c] * static_cast<std::size_t>(n); i < impl.chunk_begin[c + 1] * static_cast<std::size_t>(n); ++i) {
-        const Index node = impl.dof_base[i] / 3;
-        if (last[node] == c) continue;
-        last[node] = c;
-        for (Index k = count[node]; k < count[node + 1]; ++k) {
-          const int used = colour[chunks_of[k]];
-          if (used >= 0) stamp[used] = c;
-        }
-      }
-      int chosen = 0;
-      while (chosen < static_cast<int>(stamp.size()) && stamp[chosen] == c) ++chosen;
-      if (chosen == static_cast<int>(stamp.size())) {
-        stamp.push_back(-1);
-        impl.colour_chunks.emplace_back();
-      }
-      colour[c] = chosen;
-      impl.colour_chunks[chosen].push_back(c);
-    }
+    impl.colour_chunks = greedy_colouring(
+        n_chunks, n_nodes,
+        [&](Index c, auto&& visit) {
+          for (std::size_t i = impl.chunk_begin[c] * static_cast<std::size_t>(n);
+               i < impl.chunk_begin[c + 1] * static_cast<std::size_t>(n); ++i) {
+            visit(impl.dof_base[i] / 3);
+          }
+        },
+        [&](Index node, auto&& visit) {
+          for (Index k = count[node]; k < count[node + 1]; ++k) visit(chunks_of[k]);
+        });
   }
 
   // Brick kernel: one matrix per distinct brick.

@@ -3,7 +3,6 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <functional>
@@ -11,6 +10,7 @@
 #include <set>
 #include <nlohmann/json.hpp>
 
+#include "core/errors.hpp"
 #include "io/csv.hpp"
 #include "io/files.hpp"
 
@@ -113,12 +113,7 @@ const std::vector<std::string> kIndexOrder = {"A2/A1", "A3/A1", "A1/2/A1", "beta
 
 }  // namespace
 
-std::string number_text(double value) {
-  if (!std::isfinite(value)) return "";
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-  return std::string(buffer, result.ptr);
-}
+std::string number_text(double value) { return std::isfinite(value) ? shortest_text(value) : std::string(); }
 
 json yaml_text_to_json(const std::string& yaml) {
   try {

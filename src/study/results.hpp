@@ -67,7 +67,7 @@ nlohmann::json study_json(const StudyPlan& plan, const StudyTable& table,
 /// A YAML value as JSON: numbers, booleans, strings, lists, maps.
 nlohmann::json yaml_text_to_json(const std::string& yaml);
 
-/// Shortest text that reads back as `value`.
+/// Shortest text that reads back as `value` (core shortest_text); empty for NaN and infinities (an empty cell).
 std::string number_text(double value);
 
 }  // namespace crackle::study
