@@ -1,7 +1,6 @@
 #include "fem/system.hpp"
 
 #include <cmath>
-#include <optional>
 
 #include "core/errors.hpp"
 #include "core/fingerprint.hpp"
@@ -14,7 +13,6 @@ namespace crackle::fem {
 struct System::Lazy {
   std::unique_ptr<VectorX> lumped_mass;
   std::unique_ptr<ElasticOperator> stiffness;
-  std::optional<std::uint64_t> fingerprint;  ///< the caches ask for it per stage and per refinement run
 };
 
 VectorX LoadShape::dense(Index n_dofs) const {
@@ -38,7 +36,6 @@ System::~System() = default;
 System::System(System&&) noexcept = default;
 
 std::uint64_t System::fingerprint() const {
-  if (lazy_->fingerprint) return *lazy_->fingerprint;
   std::uint64_t hash = kFingerprintSeed;
   const auto mix = [&hash](const void* data, std::size_t bytes) { fingerprint_mix(hash, data, bytes); };
   const std::uint64_t formulation = CRACKLE_FORMULATION_HASH;
@@ -65,7 +62,6 @@ std::uint64_t System::fingerprint() const {
   mix(layout, sizeof layout);
   mix(constraints_.fixed.data(), constraints_.fixed.size());
   mix(constraints_.values.data(), sizeof(double) * constraints_.values.size());
-  lazy_->fingerprint = hash;
   return hash;
 }
 
