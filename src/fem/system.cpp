@@ -1,6 +1,7 @@
 #include "fem/system.hpp"
 
 #include <cmath>
+#include <optional>
 
 #include "core/errors.hpp"
 #include "core/fingerprint.hpp"
@@ -13,6 +14,7 @@ namespace crackle::fem {
 struct System::Lazy {
   std::unique_ptr<VectorX> lumped_mass;
   std::unique_ptr<ElasticOperator> stiffness;
+  std::optional<std::uint64_t> fingerprint;  ///< the caches ask for it per stage and per refinement run
 };
 
 VectorX LoadShape::dense(Index n_dofs) const {
@@ -36,6 +38,7 @@ System::~System() = default;
 System::System(System&&) noexcept = default;
 
 std::uint64_t System::fingerprint() const {
+  if (lazy_->fingerprint) return *lazy_->fingerprint;
   std::uint64_t hash = kFingerprintSeed;
   const auto mix = [&hash](const void* data, std::size_t bytes) { fingerprint_mix(hash, data, bytes); };
   const std::uint64_t formulation = CRACKLE_FORMULATION_HASH;
@@ -62,6 +65,7 @@ std::uint64_t System::fingerprint() const {
   mix(layout, sizeof layout);
   mix(constraints_.fixed.data(), constraints_.fixed.size());
   mix(constraints_.values.data(), sizeof(double) * constraints_.values.size());
+  lazy_->fingerprint = hash;
   return hash;
 }
 

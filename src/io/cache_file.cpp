@@ -35,10 +35,10 @@ void CacheWriter::store(const std::filesystem::path& directory, const std::strin
 
 CacheReader::CacheReader(const std::filesystem::path& directory, const std::string& prefix, const char (&magic)[8],
                          std::uint64_t key)
-    : in_(cache_file(directory, prefix, key), std::ios::binary) {
+    : path_(cache_file(directory, prefix, key)), in_(path_, std::ios::binary) {
   if (!in_) return;
   std::error_code error;
-  left_ = std::filesystem::file_size(cache_file(directory, prefix, key), error);
+  left_ = std::filesystem::file_size(path_, error);
   if (error) return;
   char stored_magic[8];
   std::uint64_t stored_key = 0;

@@ -67,6 +67,7 @@ class CacheReader {
   bool read(void* data, std::size_t bytes);
   /// Whether `bytes` more lie in the file (a damaged size must not allocate before it fails).
   bool fits(double bytes) const { return bytes <= static_cast<double>(left_); }
+  std::filesystem::path path_;
   std::ifstream in_;
   std::uintmax_t left_ = 0;  ///< bytes not read yet
   bool ok_ = false;
