@@ -230,6 +230,51 @@ sweep::ContinuationOptions continuation_options(const SweepSettings& settings) {
   return continuation;
 }
 
+/// The solution at `omega` by Newton from `gaps` (of `harmonics` H), mapped onto `hb`'s harmonics (the
+/// common ones kept, the others zero); none where the pair rows differ or Newton fails from it.
+std::optional<sweep::Solution> window_start(const sweep::HarmonicBalance& hb, int harmonics, const VectorX& gaps,
+                                            double omega) {
+  const int own = hb.options().harmonics;
+  const Index rows = hb.n_unknowns() / (2 * own + 1);
+  if (gaps.size() == 0 || gaps.size() != rows * (2 * harmonics + 1)) return std::nullopt;
+  VectorX guess = VectorX::Zero(hb.n_unknowns());
+  const Index common = rows * (2 * std::min(own, harmonics) + 1);
+  guess.head(common) = gaps.head(common);
+  try {
+    return hb.solve(omega, guess);
+  } catch (const SolverError&) {
+    return std::nullopt;  // continue_branch starts from the linear solution
+  }
+}
+
+/// The branch over each of settings.windows (one segment each, started from settings.window_starts or
+/// the linear solution at its lower end), with `completed` false and a warning for a window not reached to its end.
+void continue_windows(const sweep::HarmonicBalance& hb, const SweepSettings& settings,
+                      const sweep::ContinuationOptions& continuation, BranchRecorder& recorder, SweepResult& result) {
+  const double from = kTwoPi * settings.from_hz, span = kTwoPi * (settings.to_hz - settings.from_hz);
+  for (std::size_t w = 0; w < settings.windows.size(); ++w) {
+    if (w > 0) recorder.start_segment();
+    const double begin = from + settings.windows[w].first * span, end = from + settings.windows[w].second * span;
+    // The steps are relative to the start frequency: the same largest step in Hz as the whole range's.
+    sweep::ContinuationOptions options = continuation;
+    const double scale = from / begin;
+    options.max_step *= scale;
+    options.initial_step *= scale;
+    options.min_step *= scale;
+    const std::size_t before = result.points.size();
+    std::optional<sweep::Solution> start;
+    if (w < settings.window_starts.gaps.size()) start = window_start(hb, settings.window_starts.harmonics,
+                                                                    settings.window_starts.gaps[w], begin);
+    sweep::continue_branch(hb, begin, end, options, std::ref(recorder), start ? &*start : nullptr);
+    const double last = result.points.size() > before ? result.points.back().solution.omega : begin;
+    if (span > 0.0 ? last < end : last > end) {
+      result.completed = false;
+      result.warnings.push_back("the continuation stopped at " + format_number(last / kTwoPi) + " Hz, before the end " +
+                                "of its window at " + format_number(end / kTwoPi) + " Hz");
+    }
+  }
+}
+
 }  // namespace
 
 SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const SweepSettings& settings,
@@ -252,8 +297,12 @@ SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const S
     if (switch_branch) period_one.push_back(point);
     return recorder(point);
   };
-  sweep::continue_branch(hb, from, to, continuation, record);
-  add_completion(settings, continuation.max_points, result);
+  if (settings.windows.empty() || switch_branch) {
+    sweep::continue_branch(hb, from, to, continuation, record);
+    add_completion(settings, continuation.max_points, result);
+  } else {
+    continue_windows(hb, settings, continuation, recorder, result);
+  }
   if (section.subharmonic == 2 && !section.stability) {
     result.warnings.push_back("subharmonic 2 without stability: no period doubling can be found, so the branch is the "
                               "period-one response (A1/2 = 0); set sweep.stability: true (frictionless contact)");
@@ -290,6 +339,26 @@ SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const S
   result.krylov = hb.krylov_statistics();
   result.solve_s = clock.seconds();
   return result;
+}
+
+WindowStarts window_starts(const SweepResult& result, double from_hz, double to_hz, int harmonics,
+                           const std::vector<std::pair<double, double>>& windows) {
+  WindowStarts starts;
+  starts.harmonics = harmonics;
+  const auto& points = result.points;
+  for (const auto& [begin, end] : windows) {
+    const double f = from_hz + begin * (to_hz - from_hz);
+    VectorX gaps;
+    for (std::size_t i = 0; i + 1 < points.size() && points[i + 1].segment == points.front().segment; ++i) {
+      const double fa = points[i].frequency_hz(), fb = points[i + 1].frequency_hz();
+      if ((f - fa) * (f - fb) > 0.0) continue;
+      const double t = fb == fa ? 0.0 : (f - fa) / (fb - fa);
+      gaps = (1.0 - t) * points[i].solution.gaps + t * points[i + 1].solution.gaps;
+      break;
+    }
+    starts.gaps.push_back(std::move(gaps));
+  }
+  return starts;
 }
 
 SweepResult stepped_sine_sweep(const reduced::ReducedSystem& system, const SweepSettings& settings,

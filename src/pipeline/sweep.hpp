@@ -14,6 +14,7 @@
 #include <functional>
 #include <iosfwd>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -33,12 +34,26 @@ struct SweepProbe {
   Index row = 0;      ///< row of the reduced system's outputs (3 p + component)
 };
 
+/// Where the windows of SweepSettings::windows start from: per window, the gap harmonics of another
+/// sweep of the same body at the window's start (`harmonics` H of it, the layout of
+/// sweep::Solution::gaps), or an empty vector. A window starts from the linear solution where it has
+/// none, where its pair rows differ from the system's, or where Newton fails from it.
+struct WindowStarts {
+  int harmonics = 0;
+  std::vector<VectorX> gaps;
+};
+
 /// The sweep of a scene with its frequency range resolved.
 struct SweepSettings {
   scene::SweepSection section;
   double from_hz = 0.0, to_hz = 0.0;  ///< excitation frequencies [Hz]
   double bilinear_hz = 0.0;           ///< f_b of the mode the range refers to (0: given in Hz)
   std::vector<SweepProbe> probes;
+  /// Harmonic balance only: continue over these parts of the range alone, each a segment of its own
+  /// (fractions of [from_hz, to_hz], ascending, not overlapping; empty: the whole range). The
+  /// accuracy's refinement sweeps use them to re-solve only around the peaks (DETECTION.md sec. 1).
+  std::vector<std::pair<double, double>> windows;
+  WindowStarts window_starts;
 };
 
 /// The probes of the scene's transient section: the analysed component (the excitation direction
@@ -82,7 +97,8 @@ struct SweepResult {
 /// Called after each point: points so far, and the fraction of the range covered.
 using SweepProgress = std::function<void(const SweepResult&, double fraction)>;
 
-/// Harmonic-balance sweep: continuation from from_hz to to_hz (started from the linear solution).
+/// Harmonic-balance sweep: continuation from from_hz to to_hz (started from the linear solution), or
+/// over each of `settings.windows` with the step limit of the whole range (segments 0, 1, ...).
 /// With `subharmonic: 2` (and stability): the period-one branch (H/2 harmonics of the excitation, the
 /// same orders), then the period-two branch (nu = 2, H harmonics of half the excitation) from its first
 /// period doubling: where the odd-harmonic block of the nu = 2 Jacobian turns singular along the
@@ -92,6 +108,12 @@ using SweepProgress = std::function<void(const SweepResult&, double fraction)>;
 /// refers to the period-one branch.
 SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const SweepSettings& settings,
                                    const SweepProgress& progress = SweepProgress());
+
+/// The gaps of a harmonic-balance sweep's first branch (`result`, of H = `harmonics` over
+/// [from_hz, to_hz]) at the start of each window (fractions of that range), linear between the two
+/// points around it: the starts of a windowed sweep of a refinement of the same body.
+WindowStarts window_starts(const SweepResult& result, double from_hz, double to_hz, int harmonics,
+                           const std::vector<std::pair<double, double>>& windows);
 
 /// Stepped sine: `points` frequencies up, then the same down, each run from the previous state until
 /// no harmonic of any probe changes by more than `tolerance` A1 over a base period.
@@ -116,6 +138,8 @@ struct SweepCommandOptions {
   std::filesystem::path output_directory = "out";
   std::filesystem::path modal_cache;   ///< folder sharing the uncracked solve between runs
   bool progress = true;                ///< progress line on stderr
+  std::vector<std::pair<double, double>> windows;  ///< SweepSettings::windows (refinement sweeps only)
+  WindowStarts window_starts;                      ///< SweepSettings::window_starts
 };
 
 /// `crackle sweep`: modal stage (for mode-relative ranges) -> reduced model -> sweep; writes

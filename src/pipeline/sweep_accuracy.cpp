@@ -17,6 +17,7 @@
 #include "pipeline/distributed_run.hpp"
 #include "pipeline/modal_accuracy.hpp"
 #include "pipeline/refinement.hpp"
+#include "pipeline/sweep_windows.hpp"
 
 namespace crackle::pipeline {
 namespace {
@@ -49,13 +50,6 @@ EstimatePlan sweep_plan(const scene::Scene& scene, const RunRoute& route) {
   return plan;
 }
 
-/// A JSON pointer token (RFC 6901): '~' and '/' escaped.
-std::string token(const std::string& text) {
-  std::string escaped;
-  for (char c : text) escaped += c == '~' ? "~0" : c == '/' ? "~1" : std::string(1, c);
-  return escaped;
-}
-
 /// The peaks of sweep.json `probes` that are estimated, with the quantity each one's value is.
 const std::vector<std::pair<std::string, std::string>>& peak_keys() {
   static const std::vector<std::pair<std::string, std::string>> keys = {
@@ -80,7 +74,7 @@ std::vector<Quantity> quantities_of(const nlohmann::json& document) {
   for (const auto& [name, probe] : document.at("probes").items()) {
     for (const auto& [key, quantity] : peak_keys()) {
       if (!probe.contains(key) || probe[key].is_null()) continue;
-      const std::string at = "/probes/" + token(name) + "/" + key;
+      const std::string at = "/probes/" + json_pointer_token(name) + "/" + key;
       quantities.push_back({at + "/value", name + " peak " + quantity, quantity});
       quantities.push_back({at + "/frequency_hz", name + " peak " + quantity + " at [Hz]", ""});
     }
@@ -93,7 +87,7 @@ std::vector<Quantity> quantities_of(const nlohmann::json& document) {
     const std::string kind = event.at("kind");
     if (kind != "fold" && kind != "period_doubling") continue;
     const std::string name = kind + " " + std::to_string(++seen[kind]);
-    quantities.push_back({"/events/" + token(name), name + " [Hz]", ""});
+    quantities.push_back({"/events/" + json_pointer_token(name), name + " [Hz]", ""});
   }
   return quantities;
 }
@@ -124,38 +118,49 @@ class Sweeps {
       : scene_(scene), overrides_(overrides), options_(options), out_(out), progress_(progress),
         folders_(options.output_directory, options.modal_cache) {}
 
+  /// The sweep of a setting over the whole range (the scene's own when `first`).
   const SweepOutcome& get(const Setting& setting, bool first = false) {
     const auto found = outcomes_.find(setting.key());
     if (found != outcomes_.end()) return found->second;
-    SweepCommandOptions options = options_;
-    options.modal_cache = folders_.cache();
-    options.output_directory = folders_.folder(setting, first);
-    std::vector<scene::Override> overrides = overrides_;
-    if (!first) {
-      for (const scene::Override& level : level_overrides(setting)) overrides.push_back(level);
-      options.progress = false;
-    }
-    const scene::Scene scene = first ? scene_ : scene::load_scene(options_.scene_path, overrides);
-    NullStream silent;
-    SweepOutcome outcome = sweep_scene(scene, options, first ? out_ : silent, first ? progress_ : silent);
-    if (!first) {
-      out_ << "accuracy: refinement sweep " << describe(setting) << ": " << std::setprecision(3) << outcome.wall_s
-           << " s\n";
-      refinement_s_ += outcome.wall_s;
-    }
-    const nlohmann::json& model = outcome.document.at("model");
-    runs_.push_back({{"setting", describe(setting)},
-                     {"order", setting.order},
-                     {"harmonics", harmonics(setting)},
-                     {"max_frequency_hz", model.at("max_frequency_hz")},
-                     {"penalty", model.value("normal_penalty", 0.0)},
-                     {"modes", model.at("modes")},
-                     {"pairs", model.at("pairs")},
-                     {"points", outcome.document.at("points")},
-                     {"wall_s", outcome.wall_s},
-                     {"main", first}});
+    SweepOutcome outcome = sweep(setting, first, nullptr);
     if (first) first_key_ = setting.key();
     return outcomes_.emplace(setting.key(), std::move(outcome)).first->second;
+  }
+
+  /// A refinement of the setting estimated, for its estimate: over the windows around the first
+  /// sweep's peaks where every peak stays inside its window (sweep_windows.hpp), else the whole range.
+  const SweepOutcome& near(const Setting& setting) {
+    const auto full = outcomes_.find(setting.key());
+    if (full != outcomes_.end()) return full->second;
+    const auto found = windowed_.find(setting.key());
+    if (found != windowed_.end()) return found->second;
+    if (!windows_) {
+      windows_ = sweep_windows(outcomes_.at(first_key_).document, peak_names());
+      if (windows_->windows.empty()) {
+        out_ << "accuracy: refinement sweeps over the whole range: " << windows_->reason << "\n";
+      } else {
+        out_ << "accuracy: refinement sweeps over " << windows_->windows.size() << " windows around the peaks ("
+             << std::setprecision(3) << 100.0 * windows_->covered << " % of the range)\n";
+      }
+    }
+    if (windows_->windows.empty()) return get(setting);
+    SweepOutcome outcome = sweep(setting, false, &*windows_);
+    std::string why;
+    if (!windows_hold(*windows_, outcome.document, why)) {
+      out_ << "accuracy: refinement sweep " << describe(setting) << ": " << why << ": swept again over the whole range\n";
+      return get(setting);
+    }
+    return windowed_.emplace(setting.key(), std::move(outcome)).first->second;
+  }
+
+  /// What a sweep of the whole range at a setting costs [s]: its own wall time, or a windowed one's
+  /// with its solve scaled to the first sweep's points.
+  double cost_s(const Setting& setting) {
+    const SweepOutcome& outcome = near(setting);
+    if (outcomes_.count(setting.key())) return outcome.wall_s;
+    const nlohmann::json& document = outcome.document;
+    const double solve = document.at("solve_s"), points = std::max(1.0, document.at("points").get<double>());
+    return outcome.wall_s - solve + solve * outcomes_.at(first_key_).document.at("points").get<double>() / points;
   }
 
   void adopt(const Setting& setting) const { folders_.adopt(setting); }
@@ -171,9 +176,59 @@ class Sweeps {
   bool box_mesh() const { return scene_.gmsh_file.empty(); }
 
  private:
+  SweepOutcome sweep(const Setting& setting, bool first, const SweepWindows* windows) {
+    SweepCommandOptions options = options_;
+    options.modal_cache = folders_.cache();
+    options.output_directory = folders_.folder(setting, first);
+    std::vector<scene::Override> overrides = overrides_;
+    if (!first) {
+      for (const scene::Override& level : level_overrides(setting, windows != nullptr)) overrides.push_back(level);
+      options.progress = false;
+      if (windows) {
+        options.windows = windows->windows;
+        // each window starts from the first sweep's branch there (the same pair rows: band, H, penalty)
+        const SweepOutcome& main = outcomes_.at(first_key_);
+        const nlohmann::json& at = main.document.at("settings");
+        options.window_starts = window_starts(main.result, at.at("from_hz"), at.at("to_hz"), at.at("harmonics"),
+                                              windows->windows);
+      }
+    }
+    const scene::Scene scene = first ? scene_ : scene::load_scene(options_.scene_path, overrides);
+    NullStream silent;
+    SweepOutcome outcome = sweep_scene(scene, options, first ? out_ : silent, first ? progress_ : silent);
+    if (!first) {
+      out_ << "accuracy: refinement sweep " << describe(setting) << (windows ? " (windows)" : "") << ": "
+           << std::setprecision(3) << outcome.wall_s << " s (" << outcome.document.at("points") << " points in "
+           << outcome.document.at("solve_s").get<double>() << " s)\n";
+      refinement_s_ += outcome.wall_s;
+    }
+    const nlohmann::json& model = outcome.document.at("model");
+    nlohmann::json windows_json = nullptr;
+    if (windows) windows_json = outcome.document.at("settings").at("windows");
+    runs_.push_back({{"setting", describe(setting)},
+                     {"order", setting.order},
+                     {"harmonics", harmonics(setting)},
+                     {"max_frequency_hz", model.at("max_frequency_hz")},
+                     {"penalty", model.value("normal_penalty", 0.0)},
+                     {"modes", model.at("modes")},
+                     {"pairs", model.at("pairs")},
+                     {"points", outcome.document.at("points")},
+                     {"windows", windows_json},
+                     {"solve_s", outcome.document.at("solve_s")},
+                     {"wall_s", outcome.wall_s},
+                     {"main", first}});
+    return outcome;
+  }
+
+  static std::vector<std::string> peak_names() {
+    std::vector<std::string> names;
+    for (const auto& [key, quantity] : peak_keys()) names.push_back(key);
+    return names;
+  }
+
   double base_penalty() const { return outcomes_.at(first_key_).document.at("model").value("normal_penalty", 0.0); }
 
-  std::vector<scene::Override> level_overrides(const Setting& setting) const {
+  std::vector<scene::Override> level_overrides(const Setting& setting, bool windowed) const {
     const double base = outcomes_.at(first_key_).document.at("model").at("max_frequency_hz").get<double>();
     std::vector<scene::Override> levels = order_and_band_overrides(scene_, setting, base);
     levels.push_back({"sweep.harmonics", std::to_string(harmonics(setting))});
@@ -181,7 +236,9 @@ class Sweeps {
     // Half the points: the peaks are read off a parabola through the three points around them, which
     // moves them by less than 1e-6 between 200 and 100 points on the beam (docs/benchmarks.md 11.6),
     // far below the changes the refinements measure; the continuation costs about half.
-    if (scene_.sweep->method == "harmonic_balance") {
+    // A windowed sweep keeps the scene's points: its windows are short, and the same step as the
+    // main sweep's leaves the parabola's sampling out of the difference.
+    if (scene_.sweep->method == "harmonic_balance" && !windowed) {
       levels.push_back({"sweep.points", std::to_string(std::max(10, scene_.sweep->points / 2))});
     }
     // The Floquet multipliers only find period doublings (folds come from the tangent): without one
@@ -203,7 +260,9 @@ class Sweeps {
   std::ostream& out_;
   std::ostream& progress_;
   RefinementFolders folders_;
-  std::map<std::string, SweepOutcome> outcomes_;
+  std::map<std::string, SweepOutcome> outcomes_;   ///< whole-range sweeps
+  std::map<std::string, SweepOutcome> windowed_;   ///< refinement sweeps over windows
+  std::optional<SweepWindows> windows_;
   std::string first_key_;
   nlohmann::json runs_ = nlohmann::json::array();
   double refinement_s_ = 0.0;
@@ -212,13 +271,13 @@ class Sweeps {
 accuracy::Estimate estimate_of(const Quantity& quantity, Sweeps& sweeps, const Setting& setting) {
   const double value = value_of(sweeps.get(setting).document, quantity.pointer);
   const Neighbours n = neighbours(setting, sweeps.box_mesh());
-  const auto at = [&](const Setting& level) { return value_of(sweeps.get(level).document, quantity.pointer); };
+  const auto at = [&](const Setting& level) { return value_of(sweeps.near(level).document, quantity.pointer); };
   std::vector<accuracy::Component> components;
   if (quantity.modal && n.coarse) {
     // The bilinear frequency: Richardson in DOFs^-1/3 with Fs = 3, as crackle modal's and run's
     // (a geometric rate in p was 0.56 of the true error on data/beam.yaml, docs/benchmarks.md 11.9).
     components.push_back(frequency_levels_component(n, setting, [&](const Setting& level) {
-      const nlohmann::json& document = sweeps.get(level).document;
+      const nlohmann::json& document = sweeps.near(level).document;
       return std::pair{value_of(document, quantity.pointer), document.at("model").value("free_dofs", 0.0)};
     }));
   } else {
@@ -271,11 +330,11 @@ std::optional<Setting> refine(Sweeps& sweeps, const Setting& setting, const Sett
   const double here = sweeps.get(setting).wall_s;
   if (n.coarse) {
     const Setting finer = finer_mesh(setting);
-    choices.push_back({"mesh", finer, here * here / std::max(1e-3, sweeps.get(*n.coarse).wall_s)});
+    choices.push_back({"mesh", finer, here * here / std::max(1e-3, sweeps.cost_s(*n.coarse))});
   }
-  choices.push_back({"modes", n.band, sweeps.get(n.band).wall_s});
-  choices.push_back({"harmonics", n.harmonics, sweeps.get(n.harmonics).wall_s});
-  if (sweeps.has_contact()) choices.push_back({"penalty", n.penalty, sweeps.get(n.penalty).wall_s});
+  choices.push_back({"modes", n.band, sweeps.cost_s(n.band)});
+  choices.push_back({"harmonics", n.harmonics, sweeps.cost_s(n.harmonics)});
+  if (sweeps.has_contact()) choices.push_back({"penalty", n.penalty, sweeps.cost_s(n.penalty)});
   return choose_refinement(choices, summary, budget_left,
                            sweeps.box_mesh() && !n.coarse ? "mesh (not estimated below element order 3)"
                                                           : "none (no component has an error left)",
@@ -330,7 +389,9 @@ void sweep_with_accuracy(const scene::Scene& scene, const RunRoute& route, const
       "(Richardson with the observed rate per order, GCI safety factor 1.25, 3 where not asymptotic; the bilinear "
       "frequency Richardson in DOFs^-1/3, 3); modes: twice the band; harmonics: H + 2 (the change, three times: the "
       "convergence in H is not monotone); penalty: four times it (where the crack has contact); the refinement "
-      "sweeps take half the points. Estimated: each probe's peaks (value and frequency, the parabola through the "
+      "sweeps re-solve windows of the range around the peaks at the main sweep's step (runs[].windows, fractions "
+      "of the range; where the branch has no fold or period doubling and every peak stays inside its window), else "
+      "the whole range at half the points. Estimated: each probe's peaks (value and frequency, the parabola through the "
       "three points around the largest, or the value at a range end), the fold and period-doubling frequencies (by "
       "kind and order along the branch) and the bilinear frequency. delta: signed relative error of the value, "
       "error: sum of |delta|, rss: root-sum-square";

@@ -17,10 +17,11 @@
 
 namespace crackle::pipeline {
 
-/// One sweep: its sweep.json document (without route and accuracy) and wall time.
+/// One sweep: its sweep.json document (without route and accuracy), wall time and points.
 struct SweepOutcome {
   nlohmann::json document;
   double wall_s = 0.0;
+  SweepResult result;
 };
 
 /// One sweep of `scene` into options.output_directory: sweep.csv and the plots written, the summary

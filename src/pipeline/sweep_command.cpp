@@ -99,6 +99,8 @@ SweepOutcome sweep_scene(const scene::Scene& scene, const SweepCommandOptions& o
   const std::optional<modal::ModalResult> modes =
       run_modal_stage(scene, model, directory, options.modal_cache, modal_stage, out, true);
   SweepSettings settings = resolve_settings(scene, modes);
+  settings.windows = options.windows;
+  settings.window_starts = options.window_starts;
 
   Stopwatch reduction_clock;
   ReducedModel reduced = build_reduced_model(scene, model, std::max(settings.from_hz, settings.to_hz),
@@ -145,7 +147,7 @@ SweepOutcome sweep_scene(const scene::Scene& scene, const SweepCommandOptions& o
   write_outputs(directory, result, settings, out);
   print_summary(result, document, out);
   document["wall_s"] = total.seconds();
-  return {std::move(document), total.seconds()};
+  return {std::move(document), total.seconds(), std::move(result)};
 }
 
 void run_sweep_command(const SweepCommandOptions& options, std::ostream& out, std::ostream& progress) {

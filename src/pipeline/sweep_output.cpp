@@ -28,6 +28,8 @@ double amplitude_of(const SweepPoint& point, const SweepProbe& probe, int k, int
 /// points around it (on a monotonic stretch of the branch). A largest value at the first or last
 /// point of a branch that stepped past the end of the range is taken at that end (linear between the
 /// two points around it; `at_end`), so that it does not depend on how far the last step overshot.
+/// A sweep over windows of the range looks within the window of the largest value only, and says
+/// `window_edge` when that value is a window's end inside the range (the peak may lie outside it).
 nlohmann::json peak(const SweepResult& result, const SweepSettings& settings,
                     const std::function<double(const SweepPoint&)>& value) {
   const auto& points = result.points;
@@ -35,17 +37,23 @@ nlohmann::json peak(const SweepResult& result, const SweepSettings& settings,
   std::size_t best = 0;
   for (std::size_t i = 1; i < points.size(); ++i)
     if (value(points[i]) > value(points[best])) best = i;
+  std::size_t first = 0, last = points.size() - 1;  // the stretch of points around `best`
+  const bool windowed = !settings.windows.empty();
+  if (windowed) {
+    while (first < best && points[first].segment != points[best].segment) ++first;
+    while (last > best && points[last].segment != points[best].segment) --last;
+  }
   double f = points[best].frequency_hz(), y = value(points[best]);
-  if (points.size() >= 2 && (best == 0 || best + 1 == points.size())) {
-    const std::size_t inner = best == 0 ? 1 : best - 1;
-    const double end = best == 0 ? settings.from_hz : settings.to_hz;
+  if (last > first && (best == first || best == last)) {
+    const std::size_t inner = best == first ? first + 1 : best - 1;
+    const double end = best == first ? settings.from_hz : settings.to_hz;
     const double fi = points[inner].frequency_hz();
     if ((f - end) * (fi - end) < 0.0) {  // the end lies between the last two points
       y = value(points[inner]) + (y - value(points[inner])) * (end - fi) / (f - fi);
       return {{"frequency_hz", end}, {"value", y}, {"point", best}, {"at_end", true}};
     }
   }
-  if (best > 0 && best + 1 < points.size()) {
+  if (best > first && best < last) {
     const double x0 = points[best - 1].frequency_hz(), x1 = f, x2 = points[best + 1].frequency_hz();
     const double y0 = value(points[best - 1]), y1 = y, y2 = value(points[best + 1]);
     const bool monotonic = (x0 < x1 && x1 < x2) || (x0 > x1 && x1 > x2);
@@ -58,7 +66,12 @@ nlohmann::json peak(const SweepResult& result, const SweepSettings& settings,
       }
     }
   }
-  return {{"frequency_hz", f}, {"value", y}, {"point", best}};
+  nlohmann::json found = {{"frequency_hz", f}, {"value", y}, {"point", best}};
+  if (windowed) {
+    const auto& window = settings.windows.at(static_cast<std::size_t>(points[best].segment));
+    found["window_edge"] = (best == first && window.first > 0.0) || (best == last && window.second < 1.0);
+  }
+  return found;
 }
 
 }  // namespace
@@ -108,6 +121,11 @@ nlohmann::json sweep_json(const SweepResult& result, const SweepSettings& settin
       {"warnings", result.warnings}, {"solve_s", result.solve_s},
       {"amplitude_convention", "peak amplitude A_k of u(t) = sum A_k cos(2 pi k f t + phi_k), f the excitation "
                                "frequency, phases relative to the load cos(2 pi f t)"}};
+  if (!settings.windows.empty()) {  // fractions of the range, each swept as a segment of its own
+    nlohmann::json windows = nlohmann::json::array();
+    for (const auto& [begin, end] : settings.windows) windows.push_back({begin, end});
+    document["settings"]["windows"] = windows;
+  }
   nlohmann::json events = nlohmann::json::array();
   for (const SweepEvent& event : result.events) {
     nlohmann::json entry = {{"kind", event.kind}, {"frequency_hz", event.frequency_hz}, {"point", event.point}};

@@ -70,7 +70,8 @@ void expect_no_temporary_folder(const fs::path& folder) {
 
 // The README's scene as a user writes it (uniform cells [40, 4, 2], p = 2, no accuracy keys): the
 // sweep takes the route's own graded order-4 mesh, says so in sweep.json, its peak A2/A1 lands
-// within 1 % of the converged one, and the estimate holds the true error (effectivity at least 1).
+// within 1 % of the converged one, and the estimate holds the true error (effectivity at least 1),
+// from refinement sweeps over windows around the peaks.
 TEST(SweepRoute, TheBeamAsWrittenIsSweptOnTheRouteMeshWithAnEstimateThatHoldsItsPeak) {
   const fs::path out = scratch() / "beam";
   const cli_testing::Result result =
@@ -117,6 +118,16 @@ TEST(SweepRoute, TheBeamAsWrittenIsSweptOnTheRouteMeshWithAnEstimateThatHoldsIts
   EXPECT_GE(fb["error"].get<double>() / fb_true_error, 1.0) << fb.dump();
   EXPECT_LE(fb["error"].get<double>() / fb_true_error, 3.0) << fb.dump();
   EXPECT_GT(sweep["model"]["free_dofs"].get<double>(), 0.0);
+  // The branch has no fold: the five refinement sweeps re-solve windows around the peaks only, at the
+  // main sweep's step (27 points each against its 209, docs/benchmarks.md 11.6).
+  const nlohmann::json& runs = accuracy["runs"];
+  ASSERT_EQ(runs.size(), 6u) << runs.dump();
+  const double main_points = sweep["points"].get<double>();
+  for (const nlohmann::json& run : runs) {
+    if (run["main"].get<bool>()) continue;
+    ASSERT_TRUE(run["windows"].is_array()) << run.dump();
+    EXPECT_LT(run["points"].get<double>(), main_points / 4.0) << run.dump();
+  }
 }
 
 // A mesh written to be swept as it is (transient.model: reduced or full) is not re-meshed and not

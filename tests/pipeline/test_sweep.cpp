@@ -2,7 +2,7 @@
 // file:line errors), the linear sweep against the receptance, a bilinear oscillator's
 // super-harmonic resonance at f_b/2, harmonic balance against the stepped sine, the stepped sine's
 // jumps at the folds of a clearance oscillator, the period-doubled branch against the stepped sine,
-// and the files.
+// the files, and the windows the accuracy's refinement sweeps re-solve.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -18,6 +18,7 @@
 #include "core/errors.hpp"
 #include "io/csv.hpp"
 #include "pipeline/sweep.hpp"
+#include "pipeline/sweep_windows.hpp"
 #include "scene/scene.hpp"
 
 namespace crackle::pipeline {
@@ -414,6 +415,99 @@ TEST(SweepFiles, TableJsonAndPlot) {
   const plot::PlotResult drawn = plot_sweep(folder / "sweep_a.png", result, settings, 0);
   EXPECT_TRUE(std::filesystem::exists(folder / "sweep_a.dat"));
   if (plot::gnuplot_available(plot::PlotOptions())) EXPECT_TRUE(drawn.written) << drawn.note;
+}
+
+const std::vector<std::string> kPeakKeys = {"peak_a1", "peak_a2_over_a1", "peak_a3_over_a1"};
+
+// The bilinear oscillator's sweep through f_b/2 continued over windows around its peaks only (as the
+// accuracy's refinement sweeps are) finds the peaks of the whole range's sweep, in a fraction of its
+// points, started from that sweep's branch or from the linear solution alike; a window that misses a
+// peak says so (window_edge) and is refused.
+TEST(SweepWindows, TheWindowsAroundThePeaksFindTheWholeRangesPeaks) {
+  const reduced::ReducedSystem s = oscillator(0.05, 3.0, 0.0, 1e-3);  // the bilinear one, damped 5 %
+  SweepSettings settings = settings_for(0.42 * kBilinearHz, 0.58 * kBilinearHz, 20, 200);
+  settings.section.stability = false;
+  const SweepResult whole = harmonic_balance_sweep(s, settings);
+  ASSERT_TRUE(whole.completed);
+  const nlohmann::json document = sweep_json(whole, settings);
+  // the peaks converged in the sampling: the whole range at ten times the points
+  SweepSettings finer = settings;
+  finer.section.points = 2000;
+  const nlohmann::json fine = sweep_json(harmonic_balance_sweep(s, finer), finer);
+  const SweepWindows windows = sweep_windows(document, kPeakKeys);
+  ASSERT_FALSE(windows.windows.empty()) << windows.reason;
+  EXPECT_LT(windows.covered, 0.3);
+  EXPECT_EQ(windows.peaks.size(), 2 * kPeakKeys.size());  // two probes
+  for (std::size_t w = 0; w + 1 < windows.windows.size(); ++w)
+    EXPECT_LT(windows.windows[w].second, windows.windows[w + 1].first);  // ascending, disjoint
+
+  for (const bool started : {true, false}) {
+    SweepSettings windowed = settings;
+    windowed.windows = windows.windows;
+    if (started) windowed.window_starts = window_starts(whole, settings.from_hz, settings.to_hz, 20, windows.windows);
+    const SweepResult part = harmonic_balance_sweep(s, windowed);
+    ASSERT_TRUE(part.completed) << (part.warnings.empty() ? "" : part.warnings.front());
+    EXPECT_LT(part.points.size(), whole.points.size() / 2);
+    EXPECT_EQ(part.points.back().segment + 1, static_cast<int>(windows.windows.size()));
+    const nlohmann::json found = sweep_json(part, windowed);
+    EXPECT_EQ(found["settings"]["windows"].size(), windows.windows.size());
+    std::string why;
+    EXPECT_TRUE(windows_hold(windows, found, why)) << why;
+    for (const auto& [pointer, index] : windows.peaks) {
+      const nlohmann::json::json_pointer at(pointer);
+      EXPECT_FALSE(found[at]["window_edge"].get<bool>()) << pointer;
+      // the same branch sampled at other frequencies: as close to the converged peak as the whole
+      // range's sweep (measured: 0.2-0.4 times its error for A2/A1 and A3/A1, equal for A1)
+      const double converged = fine[at]["value"].get<double>();
+      const double error = std::abs(found[at]["value"].get<double>() / converged - 1.0);
+      const double whole_error = std::abs(document[at]["value"].get<double>() / converged - 1.0);
+      EXPECT_LE(error, std::max(2.0 * whole_error, 1e-5)) << pointer << " started " << started;
+      EXPECT_NEAR(found[at]["frequency_hz"].get<double>() / fine[at]["frequency_hz"].get<double>(), 1.0, 1e-4)
+          << pointer;
+    }
+  }
+
+  // A window beside the A2/A1 peak, not around it: its largest value is the window's end.
+  const nlohmann::json::json_pointer a2("/probes/a/peak_a2_over_a1");
+  const double at = (document[a2]["frequency_hz"].get<double>() - settings.from_hz) / (settings.to_hz - settings.from_hz);
+  SweepWindows beside = windows;
+  beside.windows = {{at - 0.1, at - 0.02}};
+  beside.peaks = {{"/probes/a/peak_a2_over_a1", 0}};
+  SweepSettings off = settings;
+  off.windows = beside.windows;
+  const nlohmann::json missed = sweep_json(harmonic_balance_sweep(s, off), off);
+  EXPECT_TRUE(missed[a2]["window_edge"].get<bool>());
+  std::string why;
+  EXPECT_FALSE(windows_hold(beside, missed, why));
+  EXPECT_NE(why.find("peak_a2_over_a1"), std::string::npos) << why;
+}
+
+// No windows where a start inside the range could land on another branch (a fold), where the points
+// are no branch (a stepped sine), where the sweep stopped early, or where they would cover most of it.
+TEST(SweepWindows, TheWholeRangeWhereAWindowCouldMissTheBranch) {
+  const reduced::ReducedSystem s = oscillator(0.01, 3.0, 5e-6, 0.5e-6);
+  SweepSettings settings = settings_for(1.0 / kTwoPi, 1.3 / kTwoPi, 10, 100);
+  const nlohmann::json folded = sweep_json(harmonic_balance_sweep(s, settings), settings);
+  SweepWindows windows = sweep_windows(folded, kPeakKeys);
+  EXPECT_TRUE(windows.windows.empty());
+  EXPECT_NE(windows.reason.find("fold"), std::string::npos) << windows.reason;
+
+  const reduced::ReducedSystem b = bilinear_oscillator();
+  SweepSettings plain = settings_for(0.42 * kBilinearHz, 0.58 * kBilinearHz, 20, 200);
+  plain.section.stability = false;
+  nlohmann::json document = sweep_json(harmonic_balance_sweep(b, plain), plain);
+  ASSERT_FALSE(sweep_windows(document, kPeakKeys).windows.empty());
+  nlohmann::json stepped = document;
+  stepped["settings"]["method"] = "stepped_sine";
+  EXPECT_NE(sweep_windows(stepped, kPeakKeys).reason.find("stepped sine"), std::string::npos);
+  nlohmann::json stopped = document;
+  stopped["completed"] = false;
+  EXPECT_NE(sweep_windows(stopped, kPeakKeys).reason.find("did not reach"), std::string::npos);
+  nlohmann::json coarse = document;
+  coarse["settings"]["points"] = 10;  // windows of 35 % of the range each
+  windows = sweep_windows(coarse, kPeakKeys);
+  EXPECT_TRUE(windows.windows.empty());
+  EXPECT_NE(windows.reason.find("% of the range"), std::string::npos) << windows.reason;
 }
 
 }  // namespace
