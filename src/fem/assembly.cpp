@@ -286,13 +286,17 @@ SparseMatrix assemble(Kind kind, const mesh::Mesh& mesh, const mesh::DofMap& dof
       matrix_id.clear();  // too many distinct bricks: compute on the fly
     } else {
       cached.resize(shapes.size());
-      std::atomic<bool> failed{false};
+      std::atomic<bool> failed{false}, stopped{false};
       std::string error;
 #pragma omp parallel
       {
         std::vector<double> coords(3 * npe);
 #pragma omp for schedule(dynamic, 1)
         for (int id = 0; id < static_cast<int>(shapes.size()); ++id) {
+          // a host's stop, polled by the calling thread between its element matrices (hundreds of
+          // distinct graded bricks at order 4 take seconds; the check is rate-limited by the host)
+          if (omp_get_thread_num() == 0 && interrupt_requested()) stopped = true;
+          if (stopped) continue;
           try {
             brick_coordinates(*basis.hexahedron(), shapes[id][0], shapes[id][1], shapes[id][2], coords.data());
             element_matrix(kind, basis, coords.data(), materials[static_cast<int>(shapes[id][3])],
@@ -306,6 +310,7 @@ SparseMatrix assemble(Kind kind, const mesh::Mesh& mesh, const mesh::DofMap& dof
           }
         }
       }
+      if (stopped) throw Interrupted("interrupted");
       if (failed) throw InputError(error);
     }
   }
@@ -327,10 +332,11 @@ SparseMatrix assemble(Kind kind, const mesh::Mesh& mesh, const mesh::DofMap& dof
     std::vector<double> coords(3 * npe);
     std::vector<Index> positions(static_cast<std::size_t>(npe) * npe);
     for (const std::vector<Index>& members : classes) {
-#pragma omp master
-      if (interrupt_requested()) stopped = true;  // a host's stop, between the classes
 #pragma omp for schedule(dynamic, 4)
       for (std::size_t i = 0; i < members.size(); ++i) {
+        // a host's stop, polled by the calling thread between its elements (a colour class of
+        // order-4 elements computed on the fly takes seconds)
+        if (omp_get_thread_num() == 0 && interrupt_requested()) stopped = true;
         if (failed || stopped) continue;
         const Index e = members[i];
         try {

@@ -113,8 +113,13 @@ VariantResult solve_variant(const fem::System& system, const ModalOptions& optio
   const std::uint64_t key = cached ? problem_key(system.fingerprint(), options) : 0;
   std::optional<ModeSet> from_cache;
   if (cached) from_cache = load_cached_modes(options.cache_directory, key, solved.constraints.n_free());
+  // Eigen 3.4's SparseMatrix has no move assignment: a result assigned to an existing matrix is a
+  // deep copy (hundreds of MB at order 4, seconds under load with no place to poll), so it is swapped in.
   SparseMatrix stiffness;
-  if (!from_cache) stiffness = fem::restrict_to_free(system.assemble_stiffness(), solved.constraints);
+  if (!from_cache) {
+    SparseMatrix restricted = fem::restrict_to_free(system.assemble_stiffness(), solved.constraints);
+    stiffness.swap(restricted);
+  }
   poll_interrupt();
   if (options.lumped_mass) {
     const VectorX lumped = fem::restrict_to_free(system.lumped_mass(), solved.constraints);
@@ -123,7 +128,8 @@ VariantResult solve_variant(const fem::System& system, const ModalOptions& optio
     for (Index i = 0; i < lumped.size(); ++i) solved.mass.insert(i, i) = lumped[i];
     solved.mass.makeCompressed();
   } else {
-    solved.mass = fem::restrict_to_free(system.assemble_consistent_mass(), solved.constraints);
+    SparseMatrix restricted = fem::restrict_to_free(system.assemble_consistent_mass(), solved.constraints);
+    solved.mass.swap(restricted);
   }
   solved.n_pieces = count_pieces(mesh, solved.dofs);
   const int n_rigid = count_rigid_body_modes(mesh, solved.dofs, solved.constraints);
