@@ -8,6 +8,7 @@
 #include "core/interrupt.hpp"
 #include "core/resources.hpp"
 #include "io/files.hpp"
+#include "linalg/threads.hpp"
 #include "pipeline/limits.hpp"
 #include "pipeline/reduced_model.hpp"
 #include "pipeline/run_stages.hpp"
@@ -200,16 +201,17 @@ transient::ProbeHistory run_reduced_stage(const scene::Scene& scene, const Model
                            section.snapshots, n_steps);
   for (const std::string& warning : setup.warnings) std::cerr << "crackle: warning: " << warning << "\n";
   Stopwatch run_clock;
-  // The per-step products are small: Eigen's OpenMP threads would only spin between them.
-  const int eigen_threads = Eigen::nbThreads();
-  Eigen::setNbThreads(1);
-  try {
-    march_reduced(integrator, reduced, n_steps, dt, load, snapshots, spectrum, records, summary);
-  } catch (const SolverError& error) {
-    summary.status = "unstable";
-    summary.message = error.what();
+  {
+    // The per-step products are small: Eigen's OpenMP threads would only spin between them (restored
+    // also when an interruption leaves the loop).
+    const linalg::SingleThreadedEigen one_thread;
+    try {
+      march_reduced(integrator, reduced, n_steps, dt, load, snapshots, spectrum, records, summary);
+    } catch (const SolverError& error) {
+      summary.status = "unstable";
+      summary.message = error.what();
+    }
   }
-  Eigen::setNbThreads(eigen_threads);
   summary.wall_s = run_clock.seconds();
   summary.time = integrator.time();
   summary.steps = integrator.n_steps_taken();

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <iomanip>
 #include <iostream>
 #include <limits>
 #include <map>
@@ -14,18 +13,15 @@
 #include "core/resources.hpp"
 #include "io/files.hpp"
 #include "pipeline/accuracy.hpp"
-#include "pipeline/distributed_run.hpp"
 #include "pipeline/modal_accuracy.hpp"
 #include "pipeline/refinement.hpp"
-#include "pipeline/sweep_windows.hpp"
+#include "pipeline/sweep_refinements.hpp"
 
 namespace crackle::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
 
-/// Harmonics added per level of the harmonics refinement (H against H + 2, HYBRID.md sec. 4).
-constexpr int kHarmonicsStep = 2;
 /// The harmonic-balance truncation error is taken as the change from H to H + 2, three times (an
 /// order unknown, Fs = 3): on data/beam.yaml's route the peak A2/A1 at H = 15, 17, 21, 31 is
 /// 0.154913, 0.154993, 0.154952, 0.154881, not monotone, so no rate can be fitted to it
@@ -50,13 +46,6 @@ EstimatePlan sweep_plan(const scene::Scene& scene, const RunRoute& route) {
   return plan;
 }
 
-/// The peaks of sweep.json `probes` that are estimated, with the quantity each one's value is.
-const std::vector<std::pair<std::string, std::string>>& peak_keys() {
-  static const std::vector<std::pair<std::string, std::string>> keys = {
-      {"peak_a1", "A1"}, {"peak_a2_over_a1", "A2/A1"}, {"peak_a3_over_a1", "A3/A1"}, {"peak_a_half_over_a1", "A1/2/A1"}};
-  return keys;
-}
-
 /// One estimated number of the sweep's summary: where it sits in sweep.json (a JSON pointer, the
 /// same in sweep.json `accuracy`), a label for the terminal, and the tolerance quantity it is the
 /// value of ("" for the frequencies of peaks and events).
@@ -72,7 +61,7 @@ struct Quantity {
 std::vector<Quantity> quantities_of(const nlohmann::json& document) {
   std::vector<Quantity> quantities;
   for (const auto& [name, probe] : document.at("probes").items()) {
-    for (const auto& [key, quantity] : peak_keys()) {
+    for (const auto& [key, quantity] : sweep_peak_keys()) {
       if (!probe.contains(key) || probe[key].is_null()) continue;
       const std::string at = "/probes/" + json_pointer_token(name) + "/" + key;
       quantities.push_back({at + "/value", name + " peak " + quantity, quantity});
@@ -109,166 +98,7 @@ double value_of(const nlohmann::json& document, const std::string& pointer) {
   return document[at].get<double>();
 }
 
-/// The sweeps of one `crackle sweep` with its estimate: each setting swept once, the first (the
-/// scene's own) into the output folder with its progress, the others silent in temporary folders.
-class Sweeps {
- public:
-  Sweeps(const scene::Scene& scene, const std::vector<scene::Override>& overrides, const SweepCommandOptions& options,
-         std::ostream& out, std::ostream& progress)
-      : scene_(scene), overrides_(overrides), options_(options), out_(out), progress_(progress),
-        folders_(options.output_directory, options.modal_cache) {}
-
-  /// The sweep of a setting over the whole range (the scene's own when `first`).
-  const SweepOutcome& get(const Setting& setting, bool first = false) {
-    const auto found = outcomes_.find(setting.key());
-    if (found != outcomes_.end()) return found->second;
-    SweepOutcome outcome = sweep(setting, first, nullptr);
-    if (first) first_key_ = setting.key();
-    return outcomes_.emplace(setting.key(), std::move(outcome)).first->second;
-  }
-
-  /// A refinement of the setting estimated, for its estimate: over the windows around the first
-  /// sweep's peaks where every peak stays inside its window (sweep_windows.hpp), else the whole range.
-  const SweepOutcome& near(const Setting& setting) {
-    const auto full = outcomes_.find(setting.key());
-    if (full != outcomes_.end()) return full->second;
-    const auto found = windowed_.find(setting.key());
-    if (found != windowed_.end()) return found->second;
-    if (!windows_) {
-      windows_ = sweep_windows(outcomes_.at(first_key_).document, peak_names());
-      if (windows_->windows.empty()) {
-        out_ << "accuracy: refinement sweeps over the whole range: " << windows_->reason << "\n";
-      } else {
-        out_ << "accuracy: refinement sweeps over " << windows_->windows.size() << " windows around the peaks ("
-             << std::setprecision(3) << 100.0 * windows_->covered << " % of the range)\n";
-      }
-    }
-    if (windows_->windows.empty()) return get(setting);
-    SweepOutcome outcome = sweep(setting, false, &*windows_);
-    std::string why;
-    if (!windows_hold(*windows_, outcome.document, why)) {
-      out_ << "accuracy: refinement sweep " << describe(setting) << ": " << why << ": swept again over the whole range\n";
-      return get(setting);
-    }
-    return windowed_.emplace(setting.key(), std::move(outcome)).first->second;
-  }
-
-  /// What a sweep of the whole range at a setting costs [s]: its own wall time, or a windowed one's
-  /// with its solve scaled to the first sweep's points.
-  double cost_s(const Setting& setting) {
-    const SweepOutcome& outcome = near(setting);
-    if (outcomes_.count(setting.key())) return outcome.wall_s;
-    const nlohmann::json& document = outcome.document;
-    const double solve = document.at("solve_s"), points = std::max(1.0, document.at("points").get<double>());
-    return outcome.wall_s - solve + solve * outcomes_.at(first_key_).document.at("points").get<double>() / points;
-  }
-
-  void adopt(const Setting& setting) const { folders_.adopt(setting); }
-
-  std::string describe(const Setting& setting) const {
-    return describe_setting(setting, box_mesh()) + ", H = " + std::to_string(harmonics(setting));
-  }
-  /// The scene's sweep has contact pairs whose penalty can be refined.
-  bool has_contact() const { return base_penalty() > 0.0; }
-  int harmonics(const Setting& setting) const { return scene_.sweep->harmonics + kHarmonicsStep * setting.harmonics; }
-  const nlohmann::json& runs_json() const { return runs_; }
-  double refinement_s() const { return refinement_s_; }
-  bool box_mesh() const { return scene_.gmsh_file.empty(); }
-
- private:
-  SweepOutcome sweep(const Setting& setting, bool first, const SweepWindows* windows) {
-    SweepCommandOptions options = options_;
-    options.modal_cache = folders_.cache();
-    options.output_directory = folders_.folder(setting, first);
-    std::vector<scene::Override> overrides = overrides_;
-    if (!first) {
-      for (const scene::Override& level : level_overrides(setting, windows != nullptr)) overrides.push_back(level);
-      options.progress = false;
-      if (windows) {
-        options.windows = windows->windows;
-        // each window starts from the first sweep's branch there (the same pair rows: band, H, penalty)
-        const SweepOutcome& main = outcomes_.at(first_key_);
-        const nlohmann::json& at = main.document.at("settings");
-        options.window_starts = window_starts(main.result, at.at("from_hz"), at.at("to_hz"), at.at("harmonics"),
-                                              windows->windows);
-      }
-    }
-    const scene::Scene scene = first ? scene_ : scene::load_scene(options_.scene_path, overrides);
-    NullStream silent;
-    SweepOutcome outcome = sweep_scene(scene, options, first ? out_ : silent, first ? progress_ : silent);
-    if (!first) {
-      out_ << "accuracy: refinement sweep " << describe(setting) << (windows ? " (windows)" : "") << ": "
-           << std::setprecision(3) << outcome.wall_s << " s (" << outcome.document.at("points") << " points in "
-           << outcome.document.at("solve_s").get<double>() << " s)\n";
-      refinement_s_ += outcome.wall_s;
-    }
-    const nlohmann::json& model = outcome.document.at("model");
-    nlohmann::json windows_json = nullptr;
-    if (windows) windows_json = outcome.document.at("settings").at("windows");
-    runs_.push_back({{"setting", describe(setting)},
-                     {"order", setting.order},
-                     {"harmonics", harmonics(setting)},
-                     {"max_frequency_hz", model.at("max_frequency_hz")},
-                     {"penalty", model.value("normal_penalty", 0.0)},
-                     {"modes", model.at("modes")},
-                     {"pairs", model.at("pairs")},
-                     {"points", outcome.document.at("points")},
-                     {"windows", windows_json},
-                     {"solve_s", outcome.document.at("solve_s")},
-                     {"wall_s", outcome.wall_s},
-                     {"main", first}});
-    return outcome;
-  }
-
-  static std::vector<std::string> peak_names() {
-    std::vector<std::string> names;
-    for (const auto& [key, quantity] : peak_keys()) names.push_back(key);
-    return names;
-  }
-
-  double base_penalty() const { return outcomes_.at(first_key_).document.at("model").value("normal_penalty", 0.0); }
-
-  std::vector<scene::Override> level_overrides(const Setting& setting, bool windowed) const {
-    const double base = outcomes_.at(first_key_).document.at("model").at("max_frequency_hz").get<double>();
-    std::vector<scene::Override> levels = order_and_band_overrides(scene_, setting, base);
-    levels.push_back({"sweep.harmonics", std::to_string(harmonics(setting))});
-    if (auto penalty = penalty_override(setting, base_penalty())) levels.push_back(*penalty);
-    // Half the points: the peaks are read off a parabola through the three points around them, which
-    // moves them by less than 1e-6 between 200 and 100 points on the beam (docs/benchmarks.md 11.6),
-    // far below the changes the refinements measure; the continuation costs about half.
-    // A windowed sweep keeps the scene's points: its windows are short, and the same step as the
-    // main sweep's leaves the parabola's sampling out of the difference.
-    if (scene_.sweep->method == "harmonic_balance" && !windowed) {
-      levels.push_back({"sweep.points", std::to_string(std::max(10, scene_.sweep->points / 2))});
-    }
-    // The Floquet multipliers only find period doublings (folds come from the tangent): without one
-    // in the scene's sweep, and without a period-two branch to switch to, the refinements skip them.
-    const bool doubling = std::any_of(base_events().begin(), base_events().end(), [](const nlohmann::json& event) {
-      return event.at("kind") == "period_doubling";
-    });
-    if (scene_.sweep->stability && !doubling && scene_.sweep->subharmonic != 2) {
-      levels.push_back({"sweep.stability", "false"});
-    }
-    return levels;
-  }
-
-  const nlohmann::json& base_events() const { return outcomes_.at(first_key_).document.at("events"); }
-
-  const scene::Scene& scene_;
-  std::vector<scene::Override> overrides_;
-  SweepCommandOptions options_;
-  std::ostream& out_;
-  std::ostream& progress_;
-  RefinementFolders folders_;
-  std::map<std::string, SweepOutcome> outcomes_;   ///< whole-range sweeps
-  std::map<std::string, SweepOutcome> windowed_;   ///< refinement sweeps over windows
-  std::optional<SweepWindows> windows_;
-  std::string first_key_;
-  nlohmann::json runs_ = nlohmann::json::array();
-  double refinement_s_ = 0.0;
-};
-
-accuracy::Estimate estimate_of(const Quantity& quantity, Sweeps& sweeps, const Setting& setting) {
+accuracy::Estimate estimate_of(const Quantity& quantity, RefinementSweeps& sweeps, const Setting& setting) {
   const double value = value_of(sweeps.get(setting).document, quantity.pointer);
   const Neighbours n = neighbours(setting, sweeps.box_mesh());
   const auto at = [&](const Setting& level) { return value_of(sweeps.near(level).document, quantity.pointer); };
@@ -309,7 +139,8 @@ struct SettingEstimate {
   SettingSummary summary;
 };
 
-SettingEstimate estimate_setting(Sweeps& sweeps, const Setting& setting, const std::vector<std::string>& counted) {
+SettingEstimate estimate_setting(RefinementSweeps& sweeps, const Setting& setting,
+                                 const std::vector<std::string>& counted) {
   SettingEstimate result;
   for (const Quantity& quantity : quantities_of(sweeps.get(setting).document)) {
     const accuracy::Estimate estimate = estimate_of(quantity, sweeps, setting);
@@ -323,7 +154,7 @@ SettingEstimate estimate_setting(Sweeps& sweeps, const Setting& setting, const s
 
 /// The next setting the tolerance refines to: the component with the largest error per second of
 /// its refinement sweep, or empty with `blocking` saying why none can go on.
-std::optional<Setting> refine(Sweeps& sweeps, const Setting& setting, const SettingSummary& summary,
+std::optional<Setting> refine(RefinementSweeps& sweeps, const Setting& setting, const SettingSummary& summary,
                               double budget_left, std::string& blocking) {
   const Neighbours n = neighbours(setting, sweeps.box_mesh());
   std::vector<RefinementChoice> choices;
@@ -360,7 +191,7 @@ void sweep_with_accuracy(const scene::Scene& scene, const RunRoute& route, const
     return;
   }
   io::ensure_directory(directory);
-  Sweeps sweeps(scene, overrides, options, out, progress);
+  RefinementSweeps sweeps(scene, overrides, options, out, progress);
   Setting setting;
   setting.order = scene.box.order;
   const double run_s = sweeps.get(setting, true).wall_s;

@@ -17,7 +17,8 @@
 
 namespace crackle::pipeline {
 
-/// One sweep: its sweep.json document (without route and accuracy), wall time and points.
+/// One sweep: its sweep.json document (without route and accuracy), wall time and points (the
+/// caller may release them).
 struct SweepOutcome {
   nlohmann::json document;
   double wall_s = 0.0;
