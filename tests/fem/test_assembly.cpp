@@ -4,9 +4,12 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <atomic>
+#include <cmath>
 #include <set>
 
 #include "core/errors.hpp"
+#include "core/interrupt.hpp"
 #include "fem/assembly.hpp"
 #include "fem/kernels.hpp"
 #include "fem/loads.hpp"
@@ -229,6 +232,40 @@ TEST(Assembly, BrickCacheEqualsGeneralPath) {
   const SparseMatrix general_mass =
       assemble_consistent_mass(mesh, dofs, materials, AssemblyOptions{false}, nullptr);
   EXPECT_LE(max_abs(cached_mass - general_mass), 1e-12 * max_abs(general_mass));
+}
+
+std::atomic<int> checks_asked{0};
+int stop_after = -1;  ///< the check asks to stop from this call on (-1: never)
+bool counting_check() { return ++checks_asked > stop_after && stop_after >= 0; }
+
+// A host's stop (core/interrupt.hpp) is asked between element matrices, not only between the phases
+// and the colour classes: a graded order-4 mesh has hundreds of distinct bricks of tens of ms each, and
+// a class hundreds of elements (seconds with no poll under load: python.test_interrupt's modal stage).
+TEST(Assembly, AHostsStopIsAskedBetweenElementMatricesAndStopsTheAssembly) {
+  mesh::Mesh mesh = grid_mesh(2, {6, 4, 3}, Vec3::Ones(), 0.0).mesh;
+  // graded in each direction: every brick has its own size (72 element matrices)
+  for (Vec3& x : mesh.nodes) x = Vec3(x.x() * (1.0 + x.x()), x.y() * (2.0 + x.y()), std::exp(x.z()));
+  ASSERT_TRUE(mesh.axis_aligned_bricks);
+  const mesh::DofMap dofs = identity_dofs(mesh);
+  const Materials materials{isotropic(70e9, 0.33, 2700.0)};
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);  // the calling thread does every element: it asks before each
+  const InterruptCheck previous = set_interrupt_check(&counting_check);
+  checks_asked = 0;
+  stop_after = -1;
+  AssemblyReport report;
+  assemble_stiffness(mesh, dofs, materials, AssemblyOptions{}, &report);
+  const int asked = checks_asked;
+  EXPECT_EQ(report.n_element_matrices, mesh.n_elements());
+  EXPECT_GE(asked, report.n_element_matrices + mesh.n_elements()) << report.n_colours << " colour classes";
+  checks_asked = 0;
+  stop_after = 10;  // a stop asked for during the element matrices
+  EXPECT_THROW(assemble_stiffness(mesh, dofs, materials, AssemblyOptions{}, nullptr), Interrupted);
+  checks_asked = 0;
+  stop_after = report.n_element_matrices + 10;  // during the scatter
+  EXPECT_THROW(assemble_stiffness(mesh, dofs, materials, AssemblyOptions{}, nullptr), Interrupted);
+  set_interrupt_check(previous);
+  omp_set_num_threads(threads);
 }
 
 TEST(Assembly, ThreadCountDoesNotChangeTheMatrix) {
