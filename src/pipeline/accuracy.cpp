@@ -1,13 +1,10 @@
 #include "pipeline/accuracy.hpp"
 
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
-#include <iomanip>
 #include <limits>
-#include <map>
 
 #include "accuracy/estimate.hpp"
 #include "core/errors.hpp"
@@ -16,13 +13,13 @@
 #include "pipeline/distributed_run.hpp"
 #include "pipeline/modal_accuracy.hpp"
 #include "pipeline/refinement.hpp"
+#include "pipeline/run_refinements.hpp"
 #include "pipeline/run_scene.hpp"
 
 namespace crackle::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
-
 
 /// Whether and how the scene's signatures are estimated.
 EstimatePlan accuracy_plan(const scene::Scene& scene, const RunRoute& route) {
@@ -53,91 +50,6 @@ EstimatePlan accuracy_plan(const scene::Scene& scene, const RunRoute& route) {
   return plan;
 }
 
-/// The runs of one `crackle run` with its estimate: each setting run once, the first (the scene's
-/// own) into the output folder with its progress, the others silent in temporary folders.
-class Runs {
- public:
-  Runs(const scene::Scene& scene, const std::vector<scene::Override>& overrides, const RunCommandOptions& options,
-       std::ostream& out)
-      : scene_(scene), overrides_(overrides), options_(options), out_(out),
-        folders_(options.output_directory, options.modal_cache) {}
-
-  /// The outcome of a setting (run now unless it ran before); `first` runs into the output folder.
-  const RunOutcome& get(const Setting& setting, bool first = false) {
-    const auto found = outcomes_.find(setting.key());
-    if (found != outcomes_.end()) return found->second;
-    RunCommandOptions options = options_;
-    options.modal_cache = folders_.cache();
-    options.output_directory = folders_.folder(setting, first);
-    std::vector<scene::Override> overrides = overrides_;
-    if (!first) {
-      for (const scene::Override& level : level_overrides(setting)) overrides.push_back(level);
-      options.progress = false;
-    }
-    const scene::Scene scene = first ? scene_ : scene::load_scene(options_.scene_path, overrides);
-    NullStream silent;
-    // Runs that differ only in the reduced model's band, steps or penalty share the model and the
-    // modal stage (keyed by the element order, the only mesh setting the levels change).
-    reuse_.key = "order " + std::to_string(setting.order);
-    RunOutcome outcome = run_scene(scene, options, first ? out_ : silent, &reuse_);
-    if (!first) {
-      out_ << "accuracy: refinement run " << describe(setting) << ": " << std::setprecision(3) << outcome.wall_s << " s\n";
-      refinement_s_ += outcome.wall_s;
-    }
-    runs_.push_back({{"setting", describe(setting)},
-                     {"order", setting.order},
-                     {"max_frequency_hz", outcome.max_frequency_hz},
-                     {"modes", outcome.modes},
-                     {"pairs", outcome.pairs},
-                     {"steps_per_period", steps_per_period(setting)},
-                     {"penalty", outcome.normal_penalty},
-                     {"wall_s", outcome.wall_s},
-                     {"main", first}});
-    if (first) first_key_ = setting.key();
-    return outcomes_.emplace(setting.key(), std::move(outcome)).first->second;
-  }
-
-  void adopt(const Setting& setting) const { folders_.adopt(setting); }
-
-  std::string describe(const Setting& setting) const { return describe_setting(setting, box_mesh()); }
-  const nlohmann::json& runs_json() const { return runs_; }
-  double refinement_s() const { return refinement_s_; }
-  bool box_mesh() const { return scene_.gmsh_file.empty(); }
-  /// Whether the run has contact pairs whose penalty can be refined.
-  bool has_contact() const { return outcomes_.at(first_key_).normal_penalty > 0.0; }
-  const scene::Scene& scene() const { return scene_; }
-
- private:
-  int steps_per_period(const Setting& setting) const {
-    return scene_.transient->reduced.steps_per_period << setting.steps;
-  }
-  std::vector<scene::Override> level_overrides(const Setting& setting) const {
-    const RunOutcome& base = outcomes_.at(first_key_);  // the scene's own run comes first
-    std::vector<scene::Override> levels = order_and_band_overrides(scene_, setting, base.max_frequency_hz);
-    if (setting.steps) levels.push_back({"transient.reduced.steps_per_period", std::to_string(steps_per_period(setting))});
-    if (auto penalty = penalty_override(setting, base.normal_penalty)) levels.push_back(*penalty);
-    if (setting.window) {  // the start transient decays further: a tighter steady state, a longer limit
-      const double tolerance = scene_.spectrum->tolerance * std::pow(10.0, -setting.window);
-      levels.push_back({"spectrum.steady_state.tolerance", format_number(tolerance)});
-      if (scene_.transient->periods) {
-        levels.push_back({"transient.periods", format_number(*scene_.transient->periods * (1 << (2 * setting.window)))});
-      }
-    }
-    return levels;
-  }
-
-  const scene::Scene& scene_;
-  std::vector<scene::Override> overrides_;
-  RunCommandOptions options_;
-  std::ostream& out_;
-  RefinementFolders folders_;
-  std::map<std::string, RunOutcome> outcomes_;
-  std::string first_key_;
-  RunReuse reuse_;
-  nlohmann::json runs_ = nlohmann::json::array();
-  double refinement_s_ = 0.0;
-};
-
 /// One signature of a run: probe quantity `q` (ProbeSignature order) or, for probe < 0, the
 /// excitation mode's f_uncracked, f_open, f_bilinear (q = 0, 1, 2).
 double signature(const RunOutcome& outcome, int probe, int q) {
@@ -150,7 +62,7 @@ double signature(const RunOutcome& outcome, int probe, int q) {
 }
 
 /// The components of one signature at a setting.
-accuracy::Estimate estimate_of(const std::string& quantity, Runs& runs, const Setting& setting, int probe, int q) {
+accuracy::Estimate estimate_of(const std::string& quantity, RefinementRuns& runs, const Setting& setting, int probe, int q) {
   const RunOutcome& run = runs.get(setting);
   const double value = signature(run, probe, q);
   const Neighbours n = neighbours(setting, runs.box_mesh());
@@ -204,7 +116,7 @@ struct SettingEstimate {
   SettingSummary summary;                                          ///< of the tolerance's quantities
 };
 
-SettingEstimate estimate_setting(Runs& runs, const Setting& setting, const std::vector<std::string>& quantities) {
+SettingEstimate estimate_setting(RefinementRuns& runs, const Setting& setting, const std::vector<std::string>& quantities) {
   SettingEstimate result;
   const RunOutcome& run = runs.get(setting);
   auto counts = [&](const std::string& quantity) {
@@ -241,7 +153,7 @@ SettingEstimate estimate_setting(Runs& runs, const Setting& setting, const std::
 
 /// The next setting the tolerance refines to: the component with the largest error per second of
 /// its refinement run, or empty with `blocking` saying why none can go on.
-std::optional<Setting> refine(Runs& runs, const Setting& setting, const SettingSummary& summary, double budget_left,
+std::optional<Setting> refine(RefinementRuns& runs, const Setting& setting, const SettingSummary& summary, double budget_left,
                               std::string& blocking) {
   const Neighbours n = neighbours(setting, runs.box_mesh());
   std::vector<RefinementChoice> choices;
@@ -294,7 +206,7 @@ void run_with_accuracy(const scene::Scene& scene, const RunRoute& route, const s
     out << "wrote " << (directory / "run.json").string() << "\n";
     return;
   }
-  Runs runs(scene, overrides, options, out);
+  RefinementRuns runs(scene, overrides, options, out);
   Setting setting;
   setting.order = scene.box.order;
   const RunOutcome& first = runs.get(setting, true);
