@@ -631,7 +631,8 @@ ElasticOperator::ElasticOperator(const mesh::Mesh& mesh, const mesh::DofMap& dof
     // cache), so K is assembled once and applied as a sparse matrix.
     Impl& impl = *impl_;
     impl.n_dofs = dofs.n_dofs();
-    impl.matrix = fem::assemble_stiffness(mesh, dofs, materials);
+    SparseMatrix assembled = fem::assemble_stiffness(mesh, dofs, materials);
+    impl.matrix.swap(assembled);  // Eigen 3.4's SparseMatrix assignment would copy it
     impl.matrix.makeCompressed();  // apply_add reads rows as outer[row] .. outer[row + 1]
     impl.info.kernel = "assembled";
     impl.info.n_elements = mesh.n_elements();

@@ -33,19 +33,10 @@ const SweepOutcome& RefinementSweeps::near(const Setting& setting) {
   if (full != outcomes_.end()) return full->second;
   const auto found = windowed_.find(setting.key());
   if (found != windowed_.end()) return found->second;
-  if (!windows_) {
-    windows_ = sweep_windows(outcomes_.at(first_key_).document, peak_names());
-    if (windows_->windows.empty()) {
-      out_ << "accuracy: refinement sweeps over the whole range: " << windows_->reason << "\n";
-    } else {
-      out_ << "accuracy: refinement sweeps over " << windows_->windows.size() << " windows around the peaks ("
-           << std::setprecision(3) << 100.0 * windows_->covered << " % of the range)\n";
-    }
-  }
-  if (windows_->windows.empty()) return get(setting);
-  SweepOutcome outcome = sweep(setting, false, &*windows_);
+  if (windows_.windows.empty()) return get(setting);
+  SweepOutcome outcome = sweep(setting, false, &windows_);
   std::string why;
-  if (!windows_hold(*windows_, outcome.document, why)) {
+  if (!windows_hold(windows_, outcome.document, why)) {
     out_ << "accuracy: refinement sweep " << describe(setting) << ": " << why << ": swept again over the whole range\n";
     return get(setting);
   }
@@ -87,11 +78,20 @@ SweepOutcome RefinementSweeps::sweep(const Setting& setting, bool first, const S
     refinement_s_ += outcome.wall_s;
   }
   if (first) {
-    // Each window of a refinement starts from this sweep's branch there (the same pair rows: band, H,
-    // penalty). Only those gaps are kept: the branch's points hold pair rows x (2H + 1) values each.
+    // The refinements' windows, each started from this sweep's branch there (the same pair rows:
+    // band, H, penalty). Only those gaps are kept: the branch's points hold pair rows x (2H + 1)
+    // values each.
+    std::vector<std::string> peaks;
+    for (const auto& [key, quantity] : sweep_peak_keys()) peaks.push_back(key);
+    windows_ = sweep_windows(outcome.document, peaks);
     const nlohmann::json& at = outcome.document.at("settings");
-    const SweepWindows windows = sweep_windows(outcome.document, peak_names());
-    starts_ = window_starts(outcome.result, at.at("from_hz"), at.at("to_hz"), at.at("harmonics"), windows.windows);
+    starts_ = window_starts(outcome.result, at.at("from_hz"), at.at("to_hz"), at.at("harmonics"), windows_.windows);
+    if (windows_.windows.empty()) {
+      out_ << "accuracy: refinement sweeps over the whole range: " << windows_.reason << "\n";
+    } else {
+      out_ << "accuracy: refinement sweeps over " << windows_.windows.size() << " windows around the peaks ("
+           << std::setprecision(3) << 100.0 * windows_.covered << " % of the range)\n";
+    }
   }
   outcome.result = SweepResult();
   const nlohmann::json& model = outcome.document.at("model");
@@ -110,12 +110,6 @@ SweepOutcome RefinementSweeps::sweep(const Setting& setting, bool first, const S
                    {"wall_s", outcome.wall_s},
                    {"main", first}});
   return outcome;
-}
-
-std::vector<std::string> RefinementSweeps::peak_names() {
-  std::vector<std::string> names;
-  for (const auto& [key, quantity] : sweep_peak_keys()) names.push_back(key);
-  return names;
 }
 
 double RefinementSweeps::base_penalty() const {

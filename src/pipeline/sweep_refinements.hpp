@@ -5,7 +5,6 @@
 /// first sweep's peaks where they hold (sweep_windows.hpp), else the whole range at half the points.
 #include <iosfwd>
 #include <map>
-#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -54,7 +53,6 @@ class RefinementSweeps {
 
  private:
   SweepOutcome sweep(const Setting& setting, bool first, const SweepWindows* windows);
-  static std::vector<std::string> peak_names();
   double base_penalty() const;
   std::vector<scene::Override> level_overrides(const Setting& setting, bool windowed) const;
   const nlohmann::json& base_events() const;
@@ -67,8 +65,8 @@ class RefinementSweeps {
   RefinementFolders folders_;
   std::map<std::string, SweepOutcome> outcomes_;  ///< whole-range sweeps
   std::map<std::string, SweepOutcome> windowed_;  ///< refinement sweeps over windows
-  std::optional<SweepWindows> windows_;
-  WindowStarts starts_;  ///< the first sweep's gaps at the start of each window
+  SweepWindows windows_;  ///< the refinements' windows, from the first sweep's peaks
+  WindowStarts starts_;   ///< the first sweep's gaps at the start of each window
   std::string first_key_;
   nlohmann::json runs_ = nlohmann::json::array();
   double refinement_s_ = 0.0;

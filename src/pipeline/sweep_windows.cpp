@@ -40,12 +40,12 @@ SweepWindows sweep_windows(const nlohmann::json& main, const std::vector<std::st
     double begin, end;
     std::vector<std::string> peaks;
   };
+  const double half = std::max(kWindowHalfWidth, kWindowSteps / settings.at("points").get<double>());
   std::vector<Window> raw;
   for (const auto& [name, probe] : main.at("probes").items()) {
     for (const std::string& key : peak_keys) {
       if (!probe.contains(key) || probe[key].is_null()) continue;
       const double at = (probe[key].at("frequency_hz").get<double>() - from) / (to - from);
-      const double half = std::max(kWindowHalfWidth, kWindowSteps / settings.at("points").get<double>());
       Window window{std::clamp(at - half, 0.0, 1.0), std::clamp(at + half, 0.0, 1.0), {}};
       if (window.begin == 0.0) window.end = std::max(window.end, 2.0 * half);  // as wide at the range's ends
       if (window.end == 1.0) window.begin = std::min(window.begin, 1.0 - 2.0 * half);
