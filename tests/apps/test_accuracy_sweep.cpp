@@ -126,6 +126,8 @@ TEST(SweepRoute, TheBeamAsWrittenIsSweptOnTheRouteMeshWithAnEstimateThatHoldsIts
   for (const nlohmann::json& run : runs) {
     if (run["main"].get<bool>()) continue;
     ASSERT_TRUE(run["windows"].is_array()) << run.dump();
+    EXPECT_GT(run["solve_s"].get<double>(), 0.0) << run.dump();
+    EXPECT_LE(run["solve_s"].get<double>(), run["wall_s"].get<double>()) << run.dump();
     EXPECT_LT(run["points"].get<double>(), main_points / 4.0) << run.dump();
   }
 }
