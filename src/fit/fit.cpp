@@ -321,4 +321,77 @@ std::vector<std::size_t> grid_minima(const std::vector<std::vector<double>>& axe
   return minima;
 }
 
+Profile profile(const BatchResiduals& residuals, const std::vector<std::vector<double>>& axes,
+                const std::vector<double>& values, const Bounds& bounds, std::size_t first, std::size_t second,
+                const FitOptions& options) {
+  const std::size_t d = axes.size();
+  if (!(first < second && second < d)) throw SolverError("profile: two distinct unknowns of the grid expected");
+  std::vector<std::size_t> sizes(d), strides(d, 1);
+  for (std::size_t a = d; a-- > 0;) {
+    sizes[a] = axes[a].size();
+    if (a + 1 < d) strides[a] = strides[a + 1] * sizes[a + 1];
+  }
+  if (values.size() != strides[0] * sizes[0]) throw SolverError("profile: one value per grid point expected");
+  std::vector<std::size_t> others;
+  for (std::size_t a = 0; a < d; ++a)
+    if (a != first && a != second) others.push_back(a);
+  const Eigen::Index m = static_cast<Eigen::Index>(others.size());
+  Profile result;
+  result.first = first;
+  result.second = second;
+  Bounds reduced{VectorX(m), VectorX(m)};
+  FitOptions reduced_options = options;
+  reduced_options.steps = VectorX(m);
+  for (Eigen::Index o = 0; o < m; ++o) {
+    const Eigen::Index a = static_cast<Eigen::Index>(others[static_cast<std::size_t>(o)]);
+    reduced.lower[o] = bounds.lower[a];
+    reduced.upper[o] = bounds.upper[a];
+    reduced_options.steps[o] = options.steps.size() == static_cast<Eigen::Index>(d) ? options.steps[a] : 1e-6;
+  }
+  for (std::size_t a = 0; a < sizes[first]; ++a) {
+    for (std::size_t b = 0; b < sizes[second]; ++b) {
+      // The slice's least grid point.
+      std::size_t best = values.size();
+      for (std::size_t flat = 0; flat < values.size(); ++flat) {
+        if ((flat / strides[first]) % sizes[first] != a || (flat / strides[second]) % sizes[second] != b) continue;
+        if (std::isfinite(values[flat]) && (best == values.size() || values[flat] < values[best])) best = flat;
+      }
+      VectorX theta(static_cast<Eigen::Index>(d));
+      for (std::size_t c = 0; c < d; ++c)
+        theta[static_cast<Eigen::Index>(c)] = axes[c][(best == values.size() ? 0 : best / strides[c]) % sizes[c]];
+      if (best == values.size()) {
+        result.chi2.push_back(std::numeric_limits<double>::quiet_NaN());
+        result.at.push_back(theta);
+        continue;
+      }
+      if (m == 0) {
+        result.chi2.push_back(values[best]);
+        result.at.push_back(theta);
+        continue;
+      }
+      const BatchResiduals on_others = [&](const std::vector<VectorX>& parts) {
+        std::vector<VectorX> full;
+        for (const VectorX& part : parts) {
+          VectorX point = theta;
+          for (Eigen::Index o = 0; o < m; ++o) point[static_cast<Eigen::Index>(others[static_cast<std::size_t>(o)])] = part[o];
+          full.push_back(point);
+        }
+        return residuals(full);
+      };
+      VectorX start(m);
+      for (Eigen::Index o = 0; o < m; ++o) start[o] = theta[static_cast<Eigen::Index>(others[static_cast<std::size_t>(o)])];
+      const FitResult fitted = fit_bounded(on_others, start, reduced, reduced_options);
+      result.evaluations += fitted.evaluations;
+      // A fit that ends above its start (it cannot, but a non-finite residual on the way can stop
+      // it early) keeps the grid point.
+      const bool better = std::isfinite(fitted.chi2) && fitted.chi2 < values[best];
+      if (better)
+        for (Eigen::Index o = 0; o < m; ++o) theta[static_cast<Eigen::Index>(others[static_cast<std::size_t>(o)])] = fitted.theta[o];
+      result.chi2.push_back(better ? fitted.chi2 : values[best]);
+      result.at.push_back(theta);
+    }
+  }
+  return result;
+}
+
 }  // namespace crackle::fit

@@ -9,7 +9,8 @@
 ///   95 % intervals with Student's t (eq. 9), the correlation matrix, the rank;
 /// - student_t_quantile(): the quantile of Student's t distribution;
 /// - TensorSpline: natural cubic splines over a tensor grid (the misfit map's interpolant);
-/// - grid_minima(): the local minima of values on a tensor grid.
+/// - grid_minima(): the local minima of values on a tensor grid;
+/// - profile(): the 2D profile of a misfit over two unknowns (the least over the others).
 #include <array>
 #include <functional>
 #include <string>
@@ -109,5 +110,21 @@ class TensorSpline {
 /// neighbour's (the 3^d - 1 neighbours), lowest first; NaN points are never minima; a plateau
 /// keeps its first point.
 std::vector<std::size_t> grid_minima(const std::vector<std::vector<double>>& axes, const std::vector<double>& values);
+
+/// The 2D profile of a misfit over the unknowns `first` < `second`: on each node (a, b) of
+/// axes[first] x axes[second], the least sum of squared residuals over the other unknowns within
+/// their bounds (the profile likelihood's -2 log). Each node's fit starts from the grid point of least
+/// `values` (the misfit on the whole grid, row-major, last axis fastest; NaN allowed) in that slice;
+/// the profile is never above that point's value. With two unknowns the profile is `values` itself
+/// (nothing is fitted). `options.steps` holds every unknown's step; only the others' are used.
+struct Profile {
+  std::size_t first = 0, second = 0;
+  std::vector<double> chi2;  ///< axes[first].size() x axes[second].size(), row-major (NaN: no finite misfit)
+  std::vector<VectorX> at;   ///< where each least misfit lies (every unknown)
+  int evaluations = 0;       ///< residual evaluations of the fits
+};
+Profile profile(const BatchResiduals& residuals, const std::vector<std::vector<double>>& axes,
+                const std::vector<double>& values, const Bounds& bounds, std::size_t first, std::size_t second,
+                const FitOptions& options);
 
 }  // namespace crackle::fit

@@ -283,37 +283,58 @@ std::string measurement_label(const Measurement& m) {
          (m.probe.empty() ? "" : " " + m.probe + " @ " + format_number(m.drive_hz) + " Hz");
 }
 
-/// identify_map.png: chi^2 over the first two unknowns (or one), the minima, the estimate and its
-/// 95 % joint region (the Gauss-Newton ellipse). Never throws: returns a note on failure.
+/// The Gauss-Newton 95 % joint region of unknowns i and j (the ellipse of their marginal
+/// covariance), as gnuplot data; empty where the covariance has no finite positive block.
+std::string region_data(const Fitted& best, std::size_t i, std::size_t j) {
+  std::ostringstream region;
+  if (!best.uncertainty.covariance.allFinite()) return "";
+  const Eigen::Index a = static_cast<Eigen::Index>(i), b = static_cast<Eigen::Index>(j);
+  Eigen::Matrix2d block;
+  block << best.uncertainty.covariance(a, a), best.uncertainty.covariance(a, b), best.uncertainty.covariance(b, a),
+      best.uncertainty.covariance(b, b);
+  const Eigen::LLT<Eigen::Matrix2d> llt(block);
+  if (llt.info() != Eigen::Success) return "";
+  const Eigen::Matrix2d l = llt.matrixL();
+  const Eigen::Vector2d centre(best.theta[a], best.theta[b]);
+  for (int t = 0; t <= 100; ++t) {
+    const double angle = 2.0 * M_PI * t / 100.0;
+    const Eigen::Vector2d p = centre + std::sqrt(kChi2Two95) * l * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+    region << p[0] << " " << p[1] << "\n";
+  }
+  return region.str();
+}
+
+/// gnuplot data of a misfit over two axes (row-major over the first): x y log10(chi^2), a blank line
+/// after each row.
+std::string surface_data(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>& chi2) {
+  std::ostringstream data;
+  for (std::size_t a = 0; a < x.size(); ++a) {
+    for (std::size_t b = 0; b < y.size(); ++b)
+      data << x[a] << " " << y[b] << " " << std::log10(chi2[a * y.size() + b] + 1e-300) << "\n";
+    data << "\n";
+  }
+  return data.str();
+}
+
+/// identify_map.png: chi^2 over the first two unknowns (or one; with more, its profile: the least
+/// over the others), the minima, the estimate and its 95 % joint region (the Gauss-Newton ellipse).
+/// Never throws: returns a note on failure.
 std::string plot_map(const fs::path& dir, const IdentifySpec& spec, const std::vector<std::vector<double>>& axes,
                      const std::vector<double>& chi2, const std::vector<Fitted>& minima, const Fitted& best) {
   plot::PlotOptions probe;
   if (!plot::gnuplot_available(probe)) return "gnuplot not found: no plots";
-  std::ostringstream data, marks, region, script;
-  const std::size_t k = axes.size();
-  const std::size_t n1 = k > 1 ? axes[1].size() : 1;
-  for (std::size_t flat = 0; flat < chi2.size(); ++flat) {
-    const std::size_t i0 = k > 1 ? (flat / n1) % axes[0].size() : flat;
-    if (k > 2 && (flat / (n1 * axes[1].size())) != 0) continue;  // a slice of higher dimensions
-    data << axes[0][i0] << " " << (k > 1 ? axes[1][flat % n1] : 0.0) << " " << std::log10(chi2[flat] + 1e-300) << "\n";
-    if (k > 1 && flat % n1 == n1 - 1) data << "\n";
+  std::ostringstream data, marks, script;
+  const std::size_t k = spec.unknowns.size();
+  if (k > 1) {
+    data << surface_data(axes[0], axes[1], chi2);
+  } else {
+    for (std::size_t flat = 0; flat < chi2.size(); ++flat) data << axes[0][flat] << " 0 " << std::log10(chi2[flat] + 1e-300) << "\n";
   }
   for (const Fitted& m : minima) marks << m.theta[0] << " " << (k > 1 ? m.theta[1] : m.chi2) << "\n";
-  if (k > 1 && best.uncertainty.covariance.allFinite()) {
-    const Eigen::LLT<Eigen::Matrix2d> llt(best.uncertainty.covariance.topLeftCorner(2, 2));
-    if (llt.info() == Eigen::Success) {
-      const Eigen::Matrix2d l = llt.matrixL();
-      for (int t = 0; t <= 100; ++t) {
-        const double angle = 2.0 * M_PI * t / 100.0;
-        const Eigen::Vector2d p = best.theta.head(2) + std::sqrt(kChi2Two95) * l * Eigen::Vector2d(std::cos(angle), std::sin(angle));
-        region << p[0] << " " << p[1] << "\n";
-      }
-    }
-  }
   io::write_file_atomic(dir / "identify_map.dat", "# " + spec.unknowns[0].key + (k > 1 ? " " + spec.unknowns[1].key : "") +
                                                       " log10(chi2)\n" + data.str());
   io::write_file_atomic(dir / "identify_minima.dat", marks.str());
-  io::write_file_atomic(dir / "identify_region.dat", region.str());
+  io::write_file_atomic(dir / "identify_region.dat", k > 1 ? region_data(best, 0, 1) : "");
   script << "# gnuplot script written by crackle identify; run: gnuplot identify_map.gp\n"
          << "set terminal pngcairo size 900,700 noenhanced\nset output 'identify_map.png'\n";
   script << "set xlabel " << plot::gnuplot_quote(spec.unknowns[0].key) << "\n"
@@ -321,7 +342,8 @@ std::string plot_map(const fs::path& dir, const IdentifySpec& spec, const std::v
   if (k > 1) script << "set yrange [" << spec.unknowns[1].lower << ":" << spec.unknowns[1].upper << "]\n";
   if (k > 1) {
     script << "set ylabel " << plot::gnuplot_quote(spec.unknowns[1].key) << "\n"
-           << "set title 'misfit log10(chi^2), the minima (circles) and the 95 % region of the estimate'\n"
+           << "set title '" << (k > 2 ? "misfit profile log10(chi^2) (least over the other unknowns)" : "misfit log10(chi^2)")
+           << ", the minima (circles) and the 95 % region of the estimate'\n"
            << "set view map\nset pm3d map interpolate 4,4\nset palette rgb 33,13,10\n"
            << "splot 'identify_map.dat' using 1:2:3 with pm3d notitle, "
            << "'identify_minima.dat' using 1:2:(0) with points pt 7 ps 1.5 lc rgb 'white' title 'minima', "
@@ -332,6 +354,43 @@ std::string plot_map(const fs::path& dir, const IdentifySpec& spec, const std::v
   }
   io::write_file_atomic(dir / "identify_map.gp", script.str());
   const plot::PlotResult drawn = plot::run_gnuplot(dir / "identify_map.png", dir / "identify_map.gp", probe);
+  return drawn.written ? "" : drawn.note;
+}
+
+/// identify_profiles.png (three unknowns or more): one panel per pair of unknowns, its profile
+/// log10(chi^2), the estimate and the Gauss-Newton 95 % region of the pair. Never throws.
+std::string plot_profiles(const fs::path& dir, const IdentifySpec& spec, const std::vector<std::vector<double>>& axes,
+                          const std::vector<fit::Profile>& profiles, const Fitted& best) {
+  plot::PlotOptions probe;
+  if (!plot::gnuplot_available(probe)) return "gnuplot not found: no plots";
+  const std::size_t panels = profiles.size();
+  const std::size_t columns = std::min<std::size_t>(panels, 3), rows = (panels + columns - 1) / columns;
+  std::ostringstream script;
+  script << "# gnuplot script written by crackle identify; run: gnuplot identify_profiles.gp\n"
+         << "set terminal pngcairo size " << 500 * columns << "," << 450 * rows << " noenhanced\n"
+         << "set output 'identify_profiles.png'\nset view map\nset pm3d map interpolate 4,4\n"
+         << "set palette rgb 33,13,10\nunset key\nset lmargin 12\nset xtics rotate by -30\nset multiplot layout " << rows << "," << columns
+         << " title 'misfit profiles log10(chi^2): the least over the other unknowns; the estimate and its 95 % region'\n";
+  for (std::size_t q = 0; q < panels; ++q) {
+    const fit::Profile& p = profiles[q];
+    const std::string name = "identify_profile_" + std::to_string(p.first + 1) + "_" + std::to_string(p.second + 1);
+    io::write_file_atomic(dir / (name + ".dat"), "# " + spec.unknowns[p.first].key + " " + spec.unknowns[p.second].key +
+                                                     " log10(chi2)\n" + surface_data(axes[p.first], axes[p.second], p.chi2));
+    io::write_file_atomic(dir / (name + "_region.dat"), region_data(best, p.first, p.second));
+    std::ostringstream estimate;
+    estimate << best.theta[static_cast<Eigen::Index>(p.first)] << " " << best.theta[static_cast<Eigen::Index>(p.second)] << "\n";
+    io::write_file_atomic(dir / (name + "_estimate.dat"), estimate.str());
+    const Unknown& x = spec.unknowns[p.first];
+    const Unknown& y = spec.unknowns[p.second];
+    script << "set xlabel " << plot::gnuplot_quote(x.key) << "\nset ylabel " << plot::gnuplot_quote(y.key) << "\n"
+           << "set xrange [" << x.lower << ":" << x.upper << "]\nset yrange [" << y.lower << ":" << y.upper << "]\n"
+           << "splot '" << name << ".dat' using 1:2:3 with pm3d, '" << name
+           << "_region.dat' using 1:2:(0) with lines lw 2 lc rgb 'white', '" << name
+           << "_estimate.dat' using 1:2:(0) with points pt 7 ps 1.2 lc rgb 'white'\n";
+  }
+  script << "unset multiplot\n";
+  io::write_file_atomic(dir / "identify_profiles.gp", script.str());
+  const plot::PlotResult drawn = plot::run_gnuplot(dir / "identify_profiles.png", dir / "identify_profiles.gp", probe);
   return drawn.written ? "" : drawn.note;
 }
 
@@ -746,7 +805,22 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
   }
   const Fitted& best = distinct.front();
 
-  // ---- 4. flags
+  // ---- 4. the 2D profile of the misfit for each pair of unknowns: the least over the others on the
+  // map's interpolant, from each slice's least map point (with two unknowns, the map itself)
+  std::vector<fit::Profile> profiles;
+  if (k >= 2) {
+    fit::FitOptions smooth;
+    smooth.steps = VectorX::Constant(static_cast<Eigen::Index>(k), 1e-6);
+    const auto profiles_start = std::chrono::steady_clock::now();
+    for (std::size_t i = 0; i < k; ++i)
+      for (std::size_t j = i + 1; j < k; ++j) profiles.push_back(fit::profile(on_spline, axes, map_chi2, bounds, i, j, smooth));
+    if (k > 2)
+      log << "identify: the misfit's profiles over " << profiles.size() << " pairs of unknowns on the interpolant in "
+          << format_number(std::chrono::duration<double>(std::chrono::steady_clock::now() - profiles_start).count())
+          << " s\n";
+  }
+
+  // ---- flags
   std::vector<std::string> reasons;
   if (n < k) reasons.push_back(std::to_string(n) + " measurements for " + std::to_string(k) + " unknowns");
   if (best.uncertainty.rank_deficient)
@@ -833,6 +907,22 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
                          {"cramer_rao_noise_sd", keyed(spec, noise_bound.sd)},
                          {"chi2_at_truth", ((models[0] - values).cwiseQuotient(weights)).squaredNorm()}};
   }
+  document["profiles"] = json::array();
+  for (const fit::Profile& p : profiles) {
+    json rows = json::array();
+    for (std::size_t a = 0; a < axes[p.first].size(); ++a) {
+      json row = json::array();
+      for (std::size_t b = 0; b < axes[p.second].size(); ++b) {
+        const double value = p.chi2[a * axes[p.second].size() + b];
+        row.push_back(std::isfinite(value) ? json(value) : json(nullptr));
+      }
+      rows.push_back(row);
+    }
+    document["profiles"].push_back({{"unknowns", {spec.unknowns[p.first].key, spec.unknowns[p.second].key}},
+                                    {"axes", {axes[p.first], axes[p.second]}},
+                                    {"chi2", rows},
+                                    {"method", k == 2 ? "the map" : "least over the other unknowns on the map's interpolant"}});
+  }
   document["local_fits"] = {{"gauss_newton_iterations", gauss_newton}, {"levenberg_marquardt", forward_fits}};
   document["forward_runs"] = forward.runs();
   document["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -846,7 +936,23 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
     csv << (std::isfinite(map_chi2[flat]) ? format_number(map_chi2[flat]) : "") << "\n";
   }
   io::write_file_atomic(dir / "identify_map.csv", csv.str());
-  if (std::string note = plot_map(dir, spec, axes, map_chi2, distinct, best); !note.empty()) notes.push_back(note);
+  // identify_profiles.csv: every pair's profile as one long table (unknown_x, unknown_y name the pair).
+  if (!profiles.empty()) {
+    std::ostringstream table;
+    table << "unknown_x,unknown_y,x,y,chi2 [-]\n";
+    for (const fit::Profile& p : profiles)
+      for (std::size_t a = 0; a < axes[p.first].size(); ++a)
+        for (std::size_t b = 0; b < axes[p.second].size(); ++b) {
+          const double value = p.chi2[a * axes[p.second].size() + b];
+          table << spec.unknowns[p.first].key << "," << spec.unknowns[p.second].key << "," << format_number(axes[p.first][a])
+                << "," << format_number(axes[p.second][b]) << "," << (std::isfinite(value) ? format_number(value) : "") << "\n";
+        }
+    io::write_file_atomic(dir / "identify_profiles.csv", table.str());
+  }
+  const std::vector<double>& shown = k > 2 ? profiles.front().chi2 : map_chi2;
+  if (std::string note = plot_map(dir, spec, axes, shown, distinct, best); !note.empty()) notes.push_back(note);
+  if (k > 2)
+    if (std::string note = plot_profiles(dir, spec, axes, profiles, best); !note.empty()) notes.push_back(note);
   if (std::string note = plot_fit(dir, spec, best, weights); !note.empty()) notes.push_back(note);
   document["notes"] = notes;
   io::write_json(dir / "identify.json", document);

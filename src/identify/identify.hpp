@@ -30,8 +30,12 @@
 ///    then Gauss-Newton on the forward model from there (the first Jacobians of all minima in one
 ///    batch) until its step is below 0.1 of the estimate's standard deviation; Levenberg-Marquardt
 ///    on the forward model (fit::fit_bounded) when a step does not lower chi^2;
-/// 4. the Gauss-Newton covariance, 95 % intervals (Student t), correlations, and the flags.
-/// Outputs: identify.json, identify_map.csv, identify_map.png, identify_fit.png.
+/// 4. the Gauss-Newton covariance, 95 % intervals (Student t), correlations, and the flags;
+/// 5. the 2D profile of the misfit for each pair of unknowns (fit::profile: the least over the
+///    other unknowns on the map's interpolant; with two unknowns the map itself).
+/// Outputs: identify.json (profiles among them), identify_map.csv, identify_profiles.csv,
+/// identify_map.png (with three unknowns or more: the first two's profile), identify_profiles.png
+/// (three or more), identify_fit.png.
 #include <iosfwd>
 #include <string>
 #include <vector>

@@ -1,5 +1,5 @@
 // Bounded least squares, its covariance and intervals, Student's t, the tensor spline and the
-// minima of a grid: each against an exact answer.
+// minima of a grid and the 2D profile of a misfit: each against an exact answer.
 #include <gtest/gtest.h>
 
 #include <Eigen/LU>
@@ -7,7 +7,9 @@
 
 #include <cmath>
 #include <random>
+#include <stdexcept>
 
+#include "core/errors.hpp"
 #include "fit/fit.hpp"
 
 namespace crackle::fit {
@@ -171,6 +173,79 @@ TEST(GridMinima, FindsEveryLocalMinimumLowestFirst) {
   ASSERT_EQ(minima.size(), 2u);
   EXPECT_EQ(minima[0], 2u * 5 + 2);
   EXPECT_EQ(minima[1], 6u * 5 + 2);
+}
+
+TEST(Profile, OfAQuadraticMisfitIsItsMarginalQuadraticForm) {
+  // Linear residuals r = A theta - y in 3 and 4 unknowns: the least misfit over the others at fixed
+  // (theta_i, theta_j) is chi2_min + d^T C_ij^-1 d, d = (theta_i, theta_j) - their estimate, C = (A^T
+  // A)^-1 (the marginal covariance of the pair). The others' bounds are wide enough to hold their
+  // conditional minimisers, so the formula is exact; every node is also at most its slice's least
+  // grid value, and with two unknowns the profile is the grid itself.
+  std::mt19937 generator(3);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (const int k : {3, 4}) {
+    const int n = 7;
+    MatrixX a(n, k);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < k; ++j) a(i, j) = gauss(generator) + (i % k == j ? 2.0 : 0.0);
+    const VectorX y = VectorX::NullaryExpr(n, [&](Eigen::Index) { return gauss(generator); });
+    const BatchResiduals residuals = [&](const std::vector<VectorX>& thetas) {
+      std::vector<VectorX> out;
+      for (const VectorX& theta : thetas) out.push_back(a * theta - y);
+      return out;
+    };
+    const VectorX estimate = a.colPivHouseholderQr().solve(y);
+    const double least = (a * estimate - y).squaredNorm();
+    const MatrixX covariance = (a.transpose() * a).inverse();
+    std::vector<std::vector<double>> axes(static_cast<std::size_t>(k));
+    Bounds bounds{VectorX(k), VectorX(k)};
+    for (int j = 0; j < k; ++j) {
+      const double half = j < 2 ? 3.0 * std::sqrt(covariance(j, j)) : 30.0;  // the pair's grid about the estimate
+      bounds.lower[j] = estimate[j] - half;
+      bounds.upper[j] = estimate[j] + half;
+      for (int i = 0; i < 5; ++i) axes[static_cast<std::size_t>(j)].push_back(bounds.lower[j] + 2.0 * half * i / 4.0);
+    }
+    std::vector<double> values;
+    std::size_t total = 1;
+    for (const auto& axis : axes) total *= axis.size();
+    for (std::size_t flat = 0; flat < total; ++flat) {
+      VectorX theta(k);
+      std::size_t rest = flat;
+      for (int j = k; j-- > 0;) {
+        theta[j] = axes[static_cast<std::size_t>(j)][rest % 5];
+        rest /= 5;
+      }
+      values.push_back((a * theta - y).squaredNorm());
+    }
+    FitOptions options;
+    options.steps = VectorX::Constant(k, 1e-6);
+    const Profile p = profile(residuals, axes, values, bounds, 0, 1, options);
+    ASSERT_EQ(p.chi2.size(), 25u);
+    const Eigen::Matrix2d inverse = covariance.topLeftCorner(2, 2).inverse();
+    for (std::size_t node = 0; node < 25; ++node) {
+      const Eigen::Vector2d d(axes[0][node / 5] - estimate[0], axes[1][node % 5] - estimate[1]);
+      const double exact = least + d.dot(inverse * d);
+      EXPECT_NEAR(p.chi2[node], exact, 1e-6 * exact) << "k = " << k << ", node " << node;
+      EXPECT_NEAR((a * p.at[node] - y).squaredNorm(), p.chi2[node], 1e-9 * exact);
+      double slice = HUGE_VAL;
+      for (std::size_t flat = 0; flat < total; ++flat)
+        if (flat / (total / 5) == node / 5 && (flat / (total / 25)) % 5 == node % 5) slice = std::min(slice, values[flat]);
+      EXPECT_LE(p.chi2[node], slice * (1.0 + 1e-12));
+    }
+    EXPECT_GT(p.evaluations, 25);
+  }
+  // Two unknowns: the grid's own values, no fit.
+  const std::vector<std::vector<double>> axes{{0.0, 1.0, 2.0}, {0.0, 1.0}};
+  const std::vector<double> values{5.0, 4.0, 3.0, 2.0, 1.0, std::nan("")};
+  const Bounds bounds = box({0.0, 0.0}, {2.0, 1.0});
+  const BatchResiduals unused = [](const std::vector<VectorX>&) -> std::vector<VectorX> {
+    throw std::logic_error("no fit with two unknowns");
+  };
+  const Profile two = profile(unused, axes, values, bounds, 0, 1, FitOptions{});
+  EXPECT_EQ(two.chi2.front(), 5.0);
+  EXPECT_TRUE(std::isnan(two.chi2.back()));
+  EXPECT_EQ(two.evaluations, 0);
+  EXPECT_THROW(profile(unused, axes, values, bounds, 1, 1, FitOptions{}), SolverError);
 }
 
 }  // namespace
