@@ -298,7 +298,10 @@ class StudyResult(Result):
 
 
 class IdentifyResult(Result):
-    """``crackle identify``: ``map`` (identify_map.csv, {header: column}); ``json`` is identify.json."""
+    """``crackle identify``: ``map`` (identify_map.csv, {header: column}); ``profiles``: the misfit's 2D
+    profile of each pair of unknowns, {(key_x, key_y): (x, y, chi2)} with ``chi2[i, j]`` at ``x[i]``,
+    ``y[j]`` (NaN where no finite misfit; identify.json ``profiles``; empty with one unknown); ``json`` is
+    identify.json."""
 
     main_document = "identify.json"
 
@@ -307,6 +310,11 @@ class IdentifyResult(Result):
         if not self.json:
             self.json = document
         self.map = self.read_csv("identify_map.csv") if "identify_map.csv" in self.files else {}
+        self.profiles = {}
+        for profile in self.json.get("profiles", []):
+            chi2 = np.array([[np.nan if v is None else v for v in row] for row in profile["chi2"]], dtype=float)
+            x, y = (np.asarray(axis, dtype=float) for axis in profile["axes"])
+            self.profiles[tuple(profile["unknowns"])] = (x, y, chi2)
 
 
 class PlanResult(Result):

@@ -38,10 +38,9 @@ CASES = [
                                    ("cells: [40, 4, 2]", "cells: [20, 2, 2]"),
                                    ("transient:\n", "transient:\n  model: reduced\n"),
                                    ("spectrum:\n", "accuracy: {estimate: off}\nspectrum:\n")]),
-    # One unknown on a p = 1 mesh: 66 forward runs, about 5 s on each side.
+    # Two unknowns at 3 map points each on a p = 1 mesh.
     ("identify-beam.yaml", "identify",
-     [("points: 7", "points: 3"), ("    crack.region.z[0]: [0.005, 0.0095]", ""),
-      ("cells: [20, 2, 2]", "cells: [10, 1, 2]"), ("order: 2", "order: 1")]),
+     [("points: 7", "points: 3"), ("cells: [20, 2, 2]", "cells: [10, 1, 2]"), ("order: 2", "order: 1")]),
 ]
 
 
@@ -92,6 +91,13 @@ def test_write_gives_the_command_line_files(name, command, overrides, tmp_path):
     with open(os.path.join(python_out, result.main_document)) as file:
         written = json.load(file)
     assert json.loads(json.dumps(result.json).replace(result.folder, python_out)) == written
+    if command == "identify":
+        # the NumPy view of identify.json's profiles: with two unknowns, the map itself
+        (keys, (x, y, chi2)), = result.profiles.items()
+        assert keys == ("crack.plane.at", "crack.region.z[0]")
+        assert chi2.shape == (len(x), len(y)) == (3, 3)
+        assert list(x) == written["profiles"][0]["axes"][0]
+        assert chi2[1, 2] == written["profiles"][0]["chi2"][1][2]
     if command == "plan":
         # the NumPy view of plan.json: one row per ranked candidate, sensors by their index
         ranked = written["candidates"]
