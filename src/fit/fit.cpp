@@ -165,6 +165,14 @@ MatrixX jacobian(const BatchResiduals& residuals, const VectorX& theta, const Ve
 
 FitResult fit_bounded(const BatchResiduals& residuals, const VectorX& start, const Bounds& bounds,
                       const FitOptions& options) {
+  // Ceres reports a residual it could not evaluate (a forward run without a value there) through
+  // glog's ERROR channel, on stderr, even with logging_type SILENT; the fit's result says it
+  // (converged, message), so glog keeps to fatal messages.
+  static const bool quiet = [] {
+    FLAGS_minloglevel = google::GLOG_FATAL;
+    return true;
+  }();
+  (void)quiet;
   const Eigen::Index k = start.size();
   FitResult result;
   VectorX theta = clamp_into(start, bounds);

@@ -95,6 +95,27 @@ TEST(FitBounded, StopsAtAnActiveBoundAndSaysSo) {
   EXPECT_TRUE(result.jacobian.allFinite());
 }
 
+TEST(FitBounded, AResidualWithoutAValueStopsTheFitQuietly) {
+  // Residuals that cannot be evaluated (NaN) at the start (a map point whose forward run has no value):
+  // the fit stops there and says so in its result, and nothing reaches stderr (Ceres logs such a
+  // failure through glog by default, "Terminating: Residual and Jacobian evaluation failed").
+  const BatchResiduals residuals = [](const std::vector<VectorX>& thetas) {
+    std::vector<VectorX> out;
+    for (const VectorX& theta : thetas)
+      out.push_back(theta[0] > 1.0 ? VectorX::Constant(2, std::nan("")) : (VectorX(2) << theta[0] - 3.0, 0.0).finished());
+    return out;
+  };
+  FitOptions options;
+  options.steps = VectorX::Constant(1, 1e-6);
+  testing::internal::CaptureStderr();
+  const FitResult result = fit_bounded(residuals, VectorX::Constant(1, 2.0), box({0.0}, {5.0}), options);
+  const std::string logged = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(logged, "");
+  EXPECT_FALSE(result.converged);
+  EXPECT_FALSE(std::isfinite(result.chi2));
+  EXPECT_NE(result.message.find("evaluation failed"), std::string::npos) << result.message;
+}
+
 TEST(Uncertainty, LinearModelCovarianceIsExactAndIntervalsCoverAtTheNominalRate) {
   // y = a + b x with sigma = 1: C = (X^T X)^-1 exactly, and over many noisy replicas the 95 %
   // intervals (Student t, s^2 from the fit) cover the truth in about 95 % of them.
