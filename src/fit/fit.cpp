@@ -268,6 +268,35 @@ TensorSpline::TensorSpline(std::vector<std::vector<double>> axes, std::vector<Ve
     total *= axes_[d].size();
   }
   if (values_.size() != total) throw SolverError("TensorSpline: one value per grid point expected");
+  bool any_missing = false;
+  for (const VectorX& v : values_) any_missing = any_missing || !v.allFinite();
+  if (!any_missing) return;
+  // Each missing value takes the nearest grid point's (in grid steps) that has the quantity.
+  const std::size_t d = axes_.size();
+  const auto distance = [&](std::size_t a, std::size_t b) {
+    double sum = 0.0;
+    for (std::size_t axis = 0; axis < d; ++axis) {
+      const double step = static_cast<double>((a / strides_[axis]) % axes_[axis].size()) -
+                          static_cast<double>((b / strides_[axis]) % axes_[axis].size());
+      sum += step * step;
+    }
+    return sum;
+  };
+  std::vector<VectorX> filled = values_;
+  missing_.assign(total, VectorX::Zero(values_.front().size()));
+  for (std::size_t flat = 0; flat < total; ++flat) {
+    for (Eigen::Index q = 0; q < values_[flat].size(); ++q) {
+      if (std::isfinite(values_[flat][q])) continue;
+      missing_[flat][q] = 1.0;
+      double nearest = HUGE_VAL;
+      for (std::size_t other = 0; other < total; ++other) {
+        if (!std::isfinite(values_[other][q]) || distance(flat, other) >= nearest) continue;
+        nearest = distance(flat, other);
+        filled[flat][q] = values_[other][q];
+      }
+    }
+  }
+  values_ = std::move(filled);
 }
 
 VectorX TensorSpline::evaluate(int axis, std::size_t offset, const VectorX& theta) const {
@@ -284,7 +313,26 @@ VectorX TensorSpline::evaluate(int axis, std::size_t offset, const VectorX& thet
   return spline_at(x, y, theta[axis]).transpose();
 }
 
-VectorX TensorSpline::operator()(const VectorX& theta) const { return evaluate(0, 0, theta); }
+VectorX TensorSpline::operator()(const VectorX& theta) const {
+  VectorX result = evaluate(0, 0, theta);
+  if (missing_.empty()) return result;
+  // The cell around theta (as spline_at picks it), and a quantity missing at any of its corners.
+  const std::size_t d = axes_.size();
+  std::vector<std::size_t> low(d);
+  for (std::size_t axis = 0; axis < d; ++axis) {
+    const std::vector<double>& x = axes_[axis];
+    const double at = std::clamp(theta[static_cast<Eigen::Index>(axis)], x.front(), x.back());
+    const std::size_t i = static_cast<std::size_t>(std::upper_bound(x.begin(), x.end(), at) - x.begin());
+    low[axis] = std::clamp<std::size_t>(i, 1, x.size() - 1) - 1;
+  }
+  for (std::size_t corner = 0; corner < (std::size_t{1} << d); ++corner) {
+    std::size_t flat = 0;
+    for (std::size_t axis = 0; axis < d; ++axis) flat += (low[axis] + ((corner >> axis) & 1)) * strides_[axis];
+    for (Eigen::Index q = 0; q < result.size(); ++q)
+      if (missing_[flat][q] != 0.0) result[q] = std::numeric_limits<double>::quiet_NaN();
+  }
+  return result;
+}
 
 std::vector<std::size_t> grid_minima(const std::vector<std::vector<double>>& axes, const std::vector<double>& values) {
   const std::size_t d = axes.size();

@@ -91,7 +91,10 @@ double student_t_quantile(double p, int dof);
 
 /// Natural cubic splines through values on a tensor grid: axes[d] ascending (at least 2 points;
 /// 2 points: linear), values in row-major order (the last axis fastest), each a vector (one per
-/// quantity). Evaluation outside the grid clamps to it.
+/// quantity). Evaluation outside the grid clamps to it. A missing value (NaN: a forward run without
+/// that quantity there) stays local: the splines are built with it replaced by the nearest grid
+/// point's value of that quantity, and a quantity is NaN in every grid cell with a corner where it
+/// is missing (a natural spline is global along each grid line, so one NaN would spread along them).
 class TensorSpline {
  public:
   TensorSpline() = default;
@@ -104,6 +107,7 @@ class TensorSpline {
   std::vector<std::vector<double>> axes_;
   std::vector<VectorX> values_;
   std::vector<std::size_t> strides_;
+  std::vector<VectorX> missing_;  ///< per grid point, 1 where a quantity is missing (empty: none is)
 };
 
 /// Flat indices (row-major, last axis fastest) of the grid points whose value is no larger than any

@@ -183,6 +183,29 @@ TEST(TensorSpline, ReproducesCubicsAlongOneAxisAndLinearFunctionsEverywhere) {
   EXPECT_GT(ratio, 8.0);
 }
 
+TEST(TensorSpline, AMissingValueStaysInTheCellsAroundIt) {
+  // A linear function on a 5 x 5 grid with quantity 0 missing at one inner point: quantity 0 is NaN
+  // in the four cells around it and finite in the others, where the splines (built with the nearest
+  // value in its place) stay near the function; quantity 1, present everywhere, is exact everywhere.
+  // Before, the one NaN made quantity 0 NaN along its grid lines and beyond.
+  const std::vector<double> a{0.0, 1.0, 2.0, 3.0, 4.0}, b{0.0, 1.0, 2.0, 3.0, 4.0};
+  std::vector<VectorX> values;
+  for (double u : a)
+    for (double v : b) values.push_back((VectorX(2) << u + 2.0 * v, u - v).finished());
+  values[1 * 5 + 2][0] = std::nan("");  // at (1, 2)
+  const TensorSpline spline({a, b}, values);
+  for (double u = 0.25; u < 4.0; u += 0.5)
+    for (double v = 0.25; v < 4.0; v += 0.5) {
+      const VectorX at = spline((VectorX(2) << u, v).finished());
+      const bool around = u < 2.0 && v > 1.0 && v < 3.0;
+      EXPECT_EQ(std::isnan(at[0]), around) << u << ", " << v;
+      if (!around) EXPECT_NEAR(at[0], u + 2.0 * v, 0.35) << u << ", " << v;
+      EXPECT_NEAR(at[1], u - v, 1e-12);
+    }
+  // A grid point next to the missing one is still hit exactly.
+  EXPECT_NEAR(spline((VectorX(2) << 3.0, 2.0).finished())[0], 7.0, 1e-12);
+}
+
 TEST(GridMinima, FindsEveryLocalMinimumLowestFirst) {
   // Two wells of a symmetric function on a 9 x 5 grid: both reported, the deeper first.
   std::vector<double> u, v{0, 1, 2, 3, 4};
