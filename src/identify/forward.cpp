@@ -3,6 +3,7 @@
 #include "accuracy/estimate.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -91,13 +92,22 @@ std::vector<int> refinement_orders(int p) {
 }
 
 RefinementError refinement_error(double q0, double q1, double q2, int run_level) {
-  const accuracy::Component component = accuracy::three_level_at(
-      "mesh", q0, q1, q2, run_level + 1, accuracy::kOrderLevelRatio, accuracy::kOrderRateMin, accuracy::kOrderRateMax);
-  RefinementError result;
-  result.relative = std::abs(component.delta);
-  result.verified = component.verified;
-  if (!std::isfinite(result.relative)) result = {0.0, false};
-  return result;
+  const std::array<double, 3> q = {q0, q1, q2};
+  const double run = q[static_cast<std::size_t>(run_level)];
+  if (!std::isfinite(run)) return {0.0, false};
+  if (std::isfinite(q0) && std::isfinite(q1) && std::isfinite(q2)) {
+    const accuracy::Component component = accuracy::three_level_at(
+        "mesh", q0, q1, q2, run_level + 1, accuracy::kOrderLevelRatio, accuracy::kOrderRateMin, accuracy::kOrderRateMax);
+    if (std::isfinite(component.delta)) return {std::abs(component.delta), component.verified};
+  }
+  // A level without a value (a mode unpaired there, a sweep without the response): three times the
+  // change from the run's level to the nearest other level that has one, the finer first (an order
+  // cannot be observed from two), not verified.
+  for (const int other : {run_level + 1, run_level - 1, run_level + 2, run_level - 2}) {
+    if (other < 0 || other > 2 || !std::isfinite(q[static_cast<std::size_t>(other)])) continue;
+    return {accuracy::kCautiousSafetyFactor * std::abs(q[static_cast<std::size_t>(other)] - run) / std::abs(run), false};
+  }
+  return {0.0, false};
 }
 
 std::vector<Unknown> parse_unknowns(const YAML::Node& map, const std::string& file, const std::string& where, int line) {

@@ -101,8 +101,10 @@ std::vector<int> refinement_orders(int p);
 /// the level `run_level` (0, 1, 2) that is run: src/accuracy's three-level Richardson read
 /// geometrically in the order (accuracy::three_level_at with kOrderLevelRatio and its rate range:
 /// Fs 1.25 with a sane rate, 3 outside it; non-monotone or not converging: 3 times the change to
-/// the next level, not verified). Relative to the run's value; 0 and not verified when a level is
-/// missing (NaN). Measured on identify's beam: effectivity 1.25-1.31 (docs/benchmarks.md 13).
+/// the next level, not verified). Relative to the run's value. A level without a value (NaN): 3
+/// times the change from the run's level to the nearest other level with one (the finer first), not
+/// verified; 0 and not verified when only the run's level has a value. Measured on identify's beam:
+/// effectivity 1.25-1.31 (docs/benchmarks.md 13).
 struct RefinementError {
   double relative = 0.0;
   bool verified = true;

@@ -836,7 +836,7 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
   for (std::size_t i = 0; i < n; ++i)
     if (!error_verified[i])
       notes.push_back("the model error of " + measurement_label(spec.measured[i]) +
-                        " is not verified (the orders do not converge monotonically): 3x the change is used");
+                        " is not verified (the orders do not converge monotonically, or a level has no value): 3x a change of two levels is used (0 if only the run's level has a value)");
 
   // ---- outputs
   json document;

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_testing.hpp"
+#include "identify/forward.hpp"
 
 namespace {
 
@@ -350,6 +351,27 @@ TEST(Identify, AMeasuredDampingRatioIdentifiesTheDampingWithTheCrack) {
   EXPECT_LT(least_profile, 0.9 * least_map);
   EXPECT_TRUE(fs::exists(dir / "out" / "identify_profiles.csv"));
   EXPECT_TRUE(fs::exists(dir / "out" / "identify_profiles.png"));
+}
+
+// The model error of a quantity from the three refinement orders: Richardson with all three; where a
+// level has no value (a mode unpaired there), three times the change to the nearest level that has
+// one, the finer first, not verified - it was 0 before, which weighed such a measurement by its sigma
+// alone; with the run's level alone, 0 and not verified.
+TEST(Identify, AModelErrorWithALevelMissingIsThreeTimesTheNearestChange) {
+  using crackle::identify::refinement_error;
+  const double nan = std::nan("");
+  const auto full = refinement_error(100.0, 99.0, 98.9, 0);
+  EXPECT_TRUE(std::isfinite(full.relative) && full.relative > 0.0);
+  const auto finer = refinement_error(100.0, 99.0, nan, 0);
+  EXPECT_NEAR(finer.relative, 3.0 * 1.0 / 100.0, 1e-15);
+  EXPECT_FALSE(finer.verified);
+  const auto coarser = refinement_error(100.0, 99.0, nan, 1);  // the run is the middle level
+  EXPECT_NEAR(coarser.relative, 3.0 * 1.0 / 99.0, 1e-15);
+  EXPECT_NEAR(refinement_error(nan, 99.0, 98.5, 1).relative, 3.0 * 0.5 / 99.0, 1e-15);
+  EXPECT_NEAR(refinement_error(100.0, nan, 98.0, 0).relative, 3.0 * 2.0 / 100.0, 1e-15);
+  const auto alone = refinement_error(nan, 99.0, nan, 1);
+  EXPECT_EQ(alone.relative, 0.0);
+  EXPECT_FALSE(alone.verified);
 }
 
 TEST(Identify, BadMeasurementsAreRefusedWithFileLineAndColumn) {
