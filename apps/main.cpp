@@ -260,6 +260,10 @@ int main(int argc, char** argv) {
   run_command->add_option("--modal-cache", run.modal_cache,
                           "Folder where the modal solves (by fingerprint of K and M) and the reduced model are looked up and stored (shared by study cases)");
   run_command->add_flag("-q,--quiet", quiet, "No progress line");
+  run_command->add_option("--accuracy-start", run.accuracy_start,
+                          "The run.json or sweep.json of an earlier estimate on the same mesh: the accuracy tolerance's "
+                          "refinement starts at the setting it reached (a study passes it to the cases that share a "
+                          "mesh)");
   run_command->add_flag("--overwrite", run.overwrite,
                         "Write into a folder that holds files crackle run did not write (they are kept); the files "
                         "of an earlier crackle run there are always replaced");
@@ -280,6 +284,10 @@ int main(int argc, char** argv) {
   sweep_command->add_option("--modal-cache", sweep.modal_cache,
                             "Folder where the modal solves (by fingerprint of K and M) and the reduced model are looked up and stored");
   sweep_command->add_flag("-q,--quiet", sweep_quiet, "No progress line");
+  sweep_command->add_option("--accuracy-start", sweep.accuracy_start,
+                            "The sweep.json or run.json of an earlier estimate on the same mesh: the accuracy tolerance's "
+                            "refinement starts at the setting it reached (a study passes it to the cases that share a "
+                            "mesh)");
 
   study::StudyOptions study_options;
   study_options.executable = "/proc/self/exe";

@@ -438,15 +438,17 @@ std::vector<std::string> assignments_of(const std::vector<std::pair<std::string,
 using Pairs = std::vector<std::pair<std::string, std::string>>;
 
 /// `crackle run` and `crackle sweep`, whose options share their fields: `name(path, overrides,
-/// output, modal_cache, progress, sink)`.
+/// output, modal_cache, progress, sink, accuracy_start)`.
 template <class Options, class Runner>
 void define_stage_command(py::module_& module, const char* name, Runner runner) {
   module.def(
       name,
       [runner](const std::string& path, const Pairs& overrides, const std::string& output,
-               const std::string& modal_cache, bool progress, const py::object& sink) {
+               const std::string& modal_cache, bool progress, const py::object& sink,
+               const std::string& accuracy_start) {
         ensure_session();
         Options options;
+        options.accuracy_start = accuracy_start;
         options.scene_path = path;
         options.overrides = assignments_of(overrides);
         options.output_directory = output;
@@ -458,7 +460,7 @@ void define_stage_command(py::module_& module, const char* name, Runner runner) 
         });
       },
       py::arg("path"), py::arg("overrides"), py::arg("output"), py::arg("modal_cache") = "",
-      py::arg("progress") = true, py::arg("sink") = py::none());
+      py::arg("progress") = true, py::arg("sink") = py::none(), py::arg("accuracy_start") = "");
 }
 
 }  // namespace

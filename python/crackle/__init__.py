@@ -115,21 +115,34 @@ def modal(scene, modes=0, solver="", modal_cache="", progress=None):
             progress, lambda out, log, arrays: ModalResult(out, log, arrays))
 
 
-def _stage_command(call, make_result, scene, modal_cache, progress, quiet):
+def _start_file(accuracy_start):
+    """``--accuracy-start``'s file: a path, or an earlier RunResult's run.json / SweepResult's sweep.json."""
+    if isinstance(accuracy_start, RunResult):
+        return os.path.join(accuracy_start.folder, "run.json")
+    if isinstance(accuracy_start, SweepResult):
+        return os.path.join(accuracy_start.folder, "sweep.json")
+    return os.fspath(accuracy_start)
+
+
+def _stage_command(call, make_result, scene, modal_cache, progress, quiet, accuracy_start):
     scene = _scene(scene)
+    start = _start_file(accuracy_start)
     with private_scene(scene) as (path, overrides):
-        return _command(lambda out, sink: call(path, overrides, out, os.fspath(modal_cache), not quiet, sink),
+        return _command(lambda out, sink: call(path, overrides, out, os.fspath(modal_cache), not quiet, sink, start),
                         progress, lambda out, log, _: make_result(out, log))
 
 
-def run(scene, modal_cache="", progress=None, quiet=False):
-    """``crackle run``: modal (if needed) -> transient -> spectrum (crackle.RunResult)."""
-    return _stage_command(_crackle.run, RunResult, scene, modal_cache, progress, quiet)
+def run(scene, modal_cache="", progress=None, quiet=False, accuracy_start=""):
+    """``crackle run``: modal (if needed) -> transient -> spectrum (crackle.RunResult).
+    ``accuracy_start``: an earlier RunResult or SweepResult of the same mesh (or its run.json /
+    sweep.json): the accuracy tolerance's refinement starts at the setting it reached."""
+    return _stage_command(_crackle.run, RunResult, scene, modal_cache, progress, quiet, accuracy_start)
 
 
-def sweep(scene, modal_cache="", progress=None, quiet=False):
-    """``crackle sweep``: response curves of the reduced model (crackle.SweepResult)."""
-    return _stage_command(_crackle.sweep, SweepResult, scene, modal_cache, progress, quiet)
+def sweep(scene, modal_cache="", progress=None, quiet=False, accuracy_start=""):
+    """``crackle sweep``: response curves of the reduced model (crackle.SweepResult).
+    ``accuracy_start``: as for run()."""
+    return _stage_command(_crackle.sweep, SweepResult, scene, modal_cache, progress, quiet, accuracy_start)
 
 
 def study(scene, jobs=0, modal_cache=True, retry_failed=False, case_timeout=0.0, progress=None):

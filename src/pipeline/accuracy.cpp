@@ -159,9 +159,8 @@ std::optional<Setting> refine(RefinementRuns& runs, const Setting& setting, cons
   std::vector<RefinementChoice> choices;
   const double here = runs.get(setting).wall_s;
   if (n.coarse) {
-    const Setting finer = finer_mesh(setting);
     const double growth = here / std::max(1e-3, runs.get(*n.coarse).wall_s);
-    choices.push_back({"mesh", finer, here * growth});
+    choices.push_back(mesh_choice(setting, runs.scene(), here * growth));
   }
   choices.push_back({"modes", n.band, runs.get(n.band).wall_s});
   choices.push_back({"steps", n.steps, runs.get(n.steps).wall_s});
@@ -203,15 +202,22 @@ void run_with_accuracy(const scene::Scene& scene, const RunRoute& route, const s
     });
     // An accuracy: section that this run cannot honour is said, not ignored.
     if (scene.has_accuracy_section) std::cerr << "crackle: note: accuracy: not estimated: " << plan.reason << "\n";
+    if (!options.accuracy_start.empty()) {
+      std::cerr << "crackle: note: --accuracy-start " << options.accuracy_start.string()
+                << " not used: the signatures are not estimated (" << plan.reason << ")\n";
+    }
     out << "wrote " << (directory / "run.json").string() << "\n";
     return;
   }
   RefinementRuns runs(scene, overrides, options, out);
   Setting setting;
   setting.order = scene.box.order;
+  Setting start = tolerance_start(setting, options.accuracy_start, plan, runs.box_mesh(), out);  // checked first
+  start.harmonics = 0;  // a sweep's, where the file is a sweep.json: a run has no harmonics to refine
   const RunOutcome& first = runs.get(setting, true);
   const double run_s = first.wall_s;
   if (first.probes.empty()) throw SolverError(scene.file + ": accuracy: the run has no probe signatures to estimate");
+  setting = start;  // the scene's own run first all the same: the refinements' base band and penalty are its
   const std::vector<std::string>& quantities = scene.accuracy.quantities;
   SettingEstimate estimate = estimate_setting(runs, setting, quantities);
   const ToleranceOutcome outcome = reach_tolerance(
@@ -235,6 +241,8 @@ void run_with_accuracy(const scene::Scene& scene, const RunRoute& route, const s
                        "not asymptotic); modes: twice the band; steps: twice per period; penalty: four times; window: "
                        "the change from the window before. delta: signed relative error of the value, error: sum of "
                        "|delta|, rss: root-sum-square";
+  accuracy["reached"] = setting_json(setting);
+  if (!options.accuracy_start.empty() && plan.tolerance) accuracy["started_from"] = options.accuracy_start.string();
   accuracy["probes"] = estimate.probes;
   if (!estimate.mode.is_null()) accuracy["mode"] = estimate.mode;
   on_writer_rank([&] {

@@ -43,6 +43,9 @@ struct RunCommandOptions {
   std::filesystem::path modal_cache;  ///< folder sharing the modal solves and reduced models between runs
   bool progress = true;               ///< progress line (also needs transient.progress)
   bool overwrite = false;  ///< write into a folder that holds files of others (they are kept)
+  /// run.json or sweep.json of an earlier estimate on the same mesh: the tolerance loop starts at the
+  /// setting it reached (pipeline/refinement.hpp, tolerance_start); empty: at the scene's own.
+  std::filesystem::path accuracy_start;
 };
 
 /// `crackle run`: modal (only if needed) -> transient -> spectrum; writes run.json (the stages

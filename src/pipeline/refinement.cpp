@@ -8,6 +8,7 @@
 #include <ostream>
 
 #include "core/errors.hpp"
+#include "io/files.hpp"
 #include "mesh/box.hpp"
 #include "pipeline/modal_accuracy.hpp"
 
@@ -141,6 +142,73 @@ void RefinementFolders::adopt(const Setting& setting) const {
   }
 }
 
+nlohmann::json setting_json(const Setting& setting) {
+  return {{"order", setting.order}, {"layers", setting.layers},   {"band", setting.band},     {"steps", setting.steps},
+          {"penalty", setting.penalty}, {"harmonics", setting.harmonics}, {"window", setting.window}};
+}
+
+namespace {
+
+/// The setting of a run.json or sweep.json `accuracy.reached`.
+Setting read_reached_setting(const fs::path& file) {
+  nlohmann::json document;
+  try {
+    document = nlohmann::json::parse(io::read_file(file));
+  } catch (const nlohmann::json::exception& error) {
+    throw InputError(file.string() + ": expected the JSON of an earlier crackle run or sweep (run.json or "
+                     "sweep.json), got a file that does not parse (" + error.what() + ")");
+  }
+  const nlohmann::json* reached = nullptr;
+  if (document.is_object() && document.contains("accuracy") && document["accuracy"].is_object() &&
+      document["accuracy"].contains("reached"))
+    reached = &document["accuracy"]["reached"];
+  if (!reached || !reached->is_object()) {
+    throw InputError(file.string() + ": accuracy.reached: expected the setting an estimate reached (the run.json or "
+                     "sweep.json of a crackle run or sweep whose signatures were estimated), not found");
+  }
+  Setting setting;
+  const std::pair<const char*, int*> fields[] = {{"order", &setting.order}, {"layers", &setting.layers},
+                                                 {"band", &setting.band},   {"steps", &setting.steps},
+                                                 {"penalty", &setting.penalty}, {"harmonics", &setting.harmonics},
+                                                 {"window", &setting.window}};
+  for (const auto& [name, field] : fields) {
+    const nlohmann::json& value = reached->contains(name) ? (*reached)[name] : nlohmann::json();
+    if (!value.is_number_integer() || value.get<int>() < 0 || value.get<int>() > 16) {
+      throw InputError(file.string() + ": accuracy.reached." + name + ": expected an integer from 0 to 16, got " +
+                       (value.is_null() ? std::string("nothing") : value.dump()));
+    }
+    *field = value.get<int>();
+  }
+  return setting;
+}
+
+}  // namespace
+
+Setting tolerance_start(const Setting& own, const fs::path& start_file, const EstimatePlan& plan, bool box_mesh,
+                        std::ostream& out) {
+  if (start_file.empty()) return own;
+  if (!plan.tolerance) {
+    out << "accuracy: note: --accuracy-start " << start_file.string()
+        << " not used: the estimate has no tolerance to reach (accuracy.tolerance)\n";
+    return own;
+  }
+  Setting start = read_reached_setting(start_file);
+  if (start.order < own.order) {
+    throw InputError(start_file.string() + ": accuracy.reached.order: expected at least the scene's element order " +
+                     std::to_string(own.order) + " (an estimate on the same mesh), got " + std::to_string(start.order));
+  }
+  if (!box_mesh && (start.order != own.order || start.layers != 0)) {
+    throw InputError(start_file.string() + ": accuracy.reached: expected a setting of this Gmsh mesh (order " +
+                     std::to_string(own.order) + ", no front layers), got order " + std::to_string(start.order) +
+                     " with " + std::to_string(start.layers) + " front layers");
+  }
+  if (start.key() != own.key()) {
+    out << "accuracy: the tolerance starts at " << describe_setting(start, box_mesh) << " (reached by "
+        << start_file.string() << ")\n";
+  }
+  return start;
+}
+
 void add_to_summary(const accuracy::Estimate& estimate, SettingSummary& summary) {
   summary.worst = std::max(summary.worst, estimate.sum);
   summary.verified = summary.verified && estimate.verified;
@@ -148,6 +216,16 @@ void add_to_summary(const accuracy::Estimate& estimate, SettingSummary& summary)
     double& largest = summary.largest[component.name];
     largest = std::max(largest, std::abs(component.delta));
   }
+}
+
+RefinementChoice mesh_choice(const Setting& setting, const scene::Scene& scene, double cost) {
+  RefinementChoice choice{"mesh", finer_mesh(setting), cost, ""};
+  if (choice.next.layers > 0 && scene.grading.mode != "always") {
+    choice.blocked = "mesh (the highest element order, " + std::to_string(kHighestOrder) +
+                     ", is reached on a mesh that is not graded: finer cells, mesh.box.cells, or mesh.box.grading: "
+                     "always, whose front layers the refinement adds)";
+  }
+  return choice;
 }
 
 std::optional<Setting> choose_refinement(const std::vector<RefinementChoice>& choices, const SettingSummary& summary,
@@ -161,6 +239,10 @@ std::optional<Setting> choose_refinement(const std::vector<RefinementChoice>& ch
   }
   if (!best || best_rate <= 0.0) {
     blocking = nothing_left;
+    return std::nullopt;
+  }
+  if (!best->blocked.empty()) {
+    blocking = best->blocked;
     return std::nullopt;
   }
   if (best->name == "mesh" && best->next.layers > kMostExtraLayers) {

@@ -124,7 +124,13 @@ struct RefinementChoice {
   std::string name;
   Setting next;
   double cost = 0.0;
+  std::string blocked;  ///< why `next` cannot be run (the loop stops there if this choice is the best)
 };
+
+/// The mesh's refinement from `setting` at cost `cost` [s]: one order up, or at the highest order one
+/// more front layer - blocked where the scene's box is not graded (mesh.box.grading other than
+/// always: a run meshes it uniformly, so there are no front layers to add).
+RefinementChoice mesh_choice(const Setting& setting, const scene::Scene& scene, double cost);
 
 /// The choice with the largest error per second of its run, or empty with `blocking` saying why
 /// none can go on: no component with an error (`nothing_left`), the highest order reached, or a run
@@ -145,6 +151,19 @@ ToleranceOutcome reach_tolerance(std::optional<double> tolerance, Setting& setti
                                  const std::function<std::optional<Setting>(const Setting&, std::string&)>& refine,
                                  const std::function<SettingSummary(const Setting&)>& summarize,
                                  const std::function<std::string(const Setting&)>& describe, std::ostream& out);
+
+/// A setting as run.json and sweep.json write the one their estimate reached (`accuracy.reached`):
+/// {order, layers, band, steps, penalty, harmonics, window}.
+nlohmann::json setting_json(const Setting& setting);
+
+/// Where a tolerance loop starts: the scene's own setting `own`, or, with `start_file` (`crackle
+/// run|sweep --accuracy-start FILE`: an earlier run.json or sweep.json of a scene on the same mesh,
+/// as a study passes it to the cases that share one), the setting that file's estimate reached.
+/// Without a tolerance the file is not used and `out` says so. Throws IoError where the file cannot
+/// be read, InputError (the file, the key and what was expected) where it holds no such setting or
+/// one below the scene's own element order or, on a Gmsh mesh, with front layers.
+Setting tolerance_start(const Setting& own, const std::filesystem::path& start_file, const EstimatePlan& plan,
+                        bool box_mesh, std::ostream& out);
 
 /// The accuracy block's summary fields (estimated, setting, tolerance, quantities, budget, error,
 /// verified, met, blocking, runs, times and the estimate's share of the wall time).

@@ -138,6 +138,9 @@ struct SweepCommandOptions {
   std::filesystem::path output_directory = "out";
   std::filesystem::path modal_cache;   ///< folder sharing the uncracked solve between runs
   bool progress = true;                ///< progress line on stderr
+  /// sweep.json or run.json of an earlier estimate on the same mesh: where the tolerance loop starts
+  /// (RunCommandOptions::accuracy_start).
+  std::filesystem::path accuracy_start;
   std::vector<std::pair<double, double>> windows;  ///< SweepSettings::windows (refinement sweeps only)
   WindowStarts window_starts;                      ///< SweepSettings::window_starts
 };

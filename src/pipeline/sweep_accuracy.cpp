@@ -160,8 +160,7 @@ std::optional<Setting> refine(RefinementSweeps& sweeps, const Setting& setting, 
   std::vector<RefinementChoice> choices;
   const double here = sweeps.get(setting).wall_s;
   if (n.coarse) {
-    const Setting finer = finer_mesh(setting);
-    choices.push_back({"mesh", finer, here * here / std::max(1e-3, sweeps.cost_s(*n.coarse))});
+    choices.push_back(mesh_choice(setting, sweeps.scene(), here * here / std::max(1e-3, sweeps.cost_s(*n.coarse))));
   }
   choices.push_back({"modes", n.band, sweeps.cost_s(n.band)});
   choices.push_back({"harmonics", n.harmonics, sweeps.cost_s(n.harmonics)});
@@ -187,6 +186,10 @@ void sweep_with_accuracy(const scene::Scene& scene, const RunRoute& route, const
     outcome.document["wall_s"] = total.seconds();
     io::write_json(directory / "sweep.json", outcome.document);
     if (scene.has_accuracy_section) std::cerr << "crackle: note: accuracy: not estimated: " << plan.reason << "\n";
+    if (!options.accuracy_start.empty()) {
+      std::cerr << "crackle: note: --accuracy-start " << options.accuracy_start.string()
+                << " not used: the sweep is not estimated (" << plan.reason << ")\n";
+    }
     out << "wrote " << (directory / "sweep.json").string() << "\n";
     return;
   }
@@ -194,8 +197,11 @@ void sweep_with_accuracy(const scene::Scene& scene, const RunRoute& route, const
   RefinementSweeps sweeps(scene, overrides, options, out, progress);
   Setting setting;
   setting.order = scene.box.order;
+  Setting start = tolerance_start(setting, options.accuracy_start, plan, sweeps.box_mesh(), out);  // checked first
+  start.window = 0;  // a run's, where the file is a run.json: a sweep has no steady state to tighten
   const double run_s = sweeps.get(setting, true).wall_s;
   // The tolerance applies to accuracy.quantities: each probe's peak values and the bilinear frequency.
+  setting = start;  // the scene's own sweep first all the same: the refinements' base band and penalty are its
   const std::vector<std::string>& counted = scene.accuracy.quantities;
   SettingEstimate estimate = estimate_setting(sweeps, setting, counted);
   const ToleranceOutcome outcome = reach_tolerance(
@@ -226,6 +232,8 @@ void sweep_with_accuracy(const scene::Scene& scene, const RunRoute& route, const
       "three points around the largest, or the value at a range end), the fold and period-doubling frequencies (by "
       "kind and order along the branch) and the bilinear frequency. delta: signed relative error of the value, "
       "error: sum of |delta|, rss: root-sum-square";
+  accuracy["reached"] = setting_json(setting);
+  if (!options.accuracy_start.empty() && plan.tolerance) accuracy["started_from"] = options.accuracy_start.string();
   accuracy.update(estimate.json);  // probes, bilinear_hz, events: each number's estimate at its own place
   document["route"] = route_json(route);
   document["accuracy"] = accuracy;

@@ -50,6 +50,7 @@ class RefinementSweeps {
   const nlohmann::json& runs_json() const { return runs_; }
   double refinement_s() const { return refinement_s_; }
   bool box_mesh() const { return scene_.gmsh_file.empty(); }
+  const scene::Scene& scene() const { return scene_; }
 
  private:
   SweepOutcome sweep(const Setting& setting, bool first, const SweepWindows* windows);

@@ -237,6 +237,22 @@ const char* const kAxes[3] = {"x", "y", "z"};
 
 }  // namespace
 
+namespace {
+
+/// StudyCase::accuracy_key of a case document.
+std::string accuracy_key(const YAML::Node& document) {
+  YAML::Node key_document = copy_of(document);
+  if (key_document["transient"].IsMap()) {
+    key_document["transient"].remove("excitation");
+    key_document["transient"].remove("damping");
+  }
+  key_document.remove("spectrum");
+  key_document.remove("sweep");
+  return hash_text(emit(key_document, false));
+}
+
+}  // namespace
+
 std::string hash_text(const std::string& text) {
   std::uint64_t hash = 14695981039346656037ULL;
   for (unsigned char c : text) {
@@ -651,9 +667,13 @@ StudyPlan plan_study(const std::string& text, const std::string& file) {
     study_case.scene_text =
         "# " + describe_case(study_case, spec.vary.size()) + " of the study in " + file + "\n" + body;
     const std::string case_name = file + " " + case_folder(study_case.index) + "/scene.yaml";
+    bool tolerance = false;  // whether the case's estimate may refine to a tolerance
     try {
       if (plan.shares_grid_lines) scene::parse_scene(plan.base_text, file, study_case.overrides);
-      study_case.has_modal_section = scene::parse_scene(study_case.scene_text, case_name).has_modal_section;
+      const scene::Scene case_scene = scene::parse_scene(study_case.scene_text, case_name);
+      study_case.has_modal_section = case_scene.has_modal_section;
+      const bool automatic = case_scene.transient && case_scene.transient->model == scene::TransientModel::automatic;
+      tolerance = case_scene.accuracy.estimate != "off" && (case_scene.accuracy.tolerance || automatic);
     } catch (const InputError& error) {
       throw InputError(file + ": study: " + describe_case(study_case, spec.vary.size()) +
                        ": the case scene does not read back: " + error.what());
@@ -673,6 +693,8 @@ StudyPlan plan_study(const std::string& text, const std::string& file) {
     else if (key_document["crack"].IsMap())
       key_document["crack"].remove("gap");
     study_case.modal_key = hash_text(emit(key_document, false));
+
+    if (tolerance) study_case.accuracy_key = accuracy_key(document);
 
     YAML::Node primer = copy_of(document);
     primer.remove("transient");  // and what needs it: a modal solve is all the primer does

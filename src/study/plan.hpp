@@ -55,6 +55,12 @@ struct StudyCase {
   std::string modal_key;    ///< hash of what the uncracked modal solve depends on: the modal cache key
   std::string primer_text;  ///< scene that solves just the uncracked modes of this key (may be empty)
   bool has_modal_section = false;  ///< the scene has modal:, so `crackle run` writes modal.json too
+  /// Hash of what the accuracy tolerance's refinements depend on: the case scene without the drive,
+  /// the damping, the spectrum and the sweep's range (the mesh, the crack, the material and the model
+  /// settings). The cases with one key share a mesh: the first refines, the others start their
+  /// tolerance loops where it ended (`--accuracy-start`). Empty where the case's run or sweep has no
+  /// tolerance (accuracy.estimate off, or neither accuracy.tolerance nor transient.model auto).
+  std::string accuracy_key;
 };
 
 struct StudyPlan {

@@ -147,6 +147,13 @@ struct Group {
   int first_case = -1;
 };
 
+/// Scheduling state of the cases that share an accuracy key (StudyCase::accuracy_key): the first
+/// (the leader) refines to its tolerance alone; the others wait for it and start where it ended.
+struct AccuracyGroup {
+  enum class State { open, leading, led } state = State::open;
+  int leader = -1;
+};
+
 class StudyRun {
  public:
   StudyRun(const StudyOptions& options, const StudyPlan& plan, std::ostream& log)
@@ -163,6 +170,9 @@ class StudyRun {
   void scan_finished(bool initial);
   bool start_next();
   Job case_job(int index);
+  /// The case's `--accuracy-start FILE` arguments for `command` (run or sweep): its group leader's
+  /// run.json or sweep.json where that estimate reached a setting under a tolerance, else none.
+  std::vector<std::string> accuracy_start(int index, const std::string& command) const;
   Job primer_job(const std::string& key, int index);
   void start_command(Job& job);
   /// Polls the running jobs; true when one finished.
@@ -183,6 +193,7 @@ class StudyRun {
   std::vector<json> finished_;  ///< case.json of each done case, null while not done
   std::deque<int> pending_;     ///< this rank's cases to run, in order
   std::map<std::string, Group> groups_;
+  std::map<std::string, AccuracyGroup> accuracy_groups_;
   std::vector<Job> running_;
   std::map<int, fs::file_time_type> failed_before_;  ///< retry_failed: when the old failure was written
   Clock::time_point start_;
@@ -263,9 +274,31 @@ Job StudyRun::case_job(int index) {
     // The case folder holds the study's scene.yaml and log.txt: modal and run refuse such a folder
     // without --overwrite; sweep writes into any folder (it has no such flag).
     if (command != "sweep") argv.push_back("--overwrite");
+    if (command != "modal") {
+      for (std::string& argument : accuracy_start(index, command)) argv.push_back(std::move(argument));
+    }
     job.commands.push_back({command, argv});
   }
   return job;
+}
+
+std::vector<std::string> StudyRun::accuracy_start(int index, const std::string& command) const {
+  const std::string& key = plan_.cases[index].accuracy_key;
+  if (key.empty()) return {};
+  const auto group = accuracy_groups_.find(key);
+  if (group == accuracy_groups_.end() || group->second.leader < 0 || group->second.leader == index) return {};
+  const fs::path file = case_path(group->second.leader) / (command == "sweep" ? "sweep.json" : "run.json");
+  std::error_code error;
+  if (!fs::exists(file, error)) return {};
+  try {
+    const json document = json::parse(io::read_file(file));
+    const json accuracy = document.value("accuracy", json::object());
+    // `met` is there exactly when the estimate had a tolerance to reach (run.json, sweep.json).
+    if (!accuracy.is_object() || !accuracy.contains("reached") || !accuracy.contains("met")) return {};
+  } catch (const std::exception&) {
+    return {};  // the leader's file is its own case's concern; this case refines from its own setting
+  }
+  return {"--accuracy-start", file.string()};
 }
 
 Job StudyRun::primer_job(const std::string& key, int index) {
@@ -298,9 +331,19 @@ void StudyRun::start_command(Job& job) {
 }
 
 bool StudyRun::start_next() {
-  // A case whose modal cache key is primed (or needs no primer), else a primer for a key.
+  // A case whose modal cache key is primed (or needs no primer) and whose accuracy group's leader
+  // is done (or which leads it), else a primer for a key.
   for (auto it = pending_.begin(); it != pending_.end(); ++it) {
     if (groups_[plan_.cases[*it].modal_key].state != Group::State::primed) continue;
+    const std::string& accuracy_key = plan_.cases[*it].accuracy_key;
+    if (!accuracy_key.empty()) {
+      AccuracyGroup& group = accuracy_groups_[accuracy_key];
+      if (group.state == AccuracyGroup::State::leading) continue;
+      if (group.state == AccuracyGroup::State::open) {
+        group.state = AccuracyGroup::State::leading;
+        group.leader = *it;
+      }
+    }
     Job job = case_job(*it);
     pending_.erase(it);
     job.start = Clock::now();
@@ -340,6 +383,18 @@ void StudyRun::finish_case(Job& job, const std::string& failed_command, const st
   }
   record["wall_s"] = seconds_since(job.start);
   for (const auto& [name, value] : kept.items()) record[name] = value;
+  if (!study_case.accuracy_key.empty()) {
+    AccuracyGroup& group = accuracy_groups_[study_case.accuracy_key];
+    if (group.leader == job.case_index) {
+      group.state = AccuracyGroup::State::led;
+    } else {
+      for (const auto& command : job.commands) {  // where its tolerance loops started, if they did not at its own
+        const auto& argv = command.second;
+        const auto start = std::find(argv.begin(), argv.end(), "--accuracy-start");
+        if (start != argv.end() && start + 1 != argv.end()) record["accuracy_start"][command.first] = *(start + 1);
+      }
+    }
+  }
   io::write_json(job.folder / "case.json", record);  // last, atomically: the case is done
   finished_[job.case_index] = record;
   ++n_done_;
@@ -497,6 +552,14 @@ int StudyRun::run() {
     // Tables of an earlier run would describe a study that is about to change.
     fs::remove(directory_ / "study.csv", error);
     fs::remove(directory_ / "study.json", error);
+  }
+  for (const StudyCase& study_case : plan_.cases) {
+    // A case done before leads its accuracy group: the others start where its tolerance loop ended.
+    if (!study_case.accuracy_key.empty() && !finished_[study_case.index].is_null() &&
+        finished_[study_case.index].value("status", "") == "ok") {
+      AccuracyGroup& group = accuracy_groups_[study_case.accuracy_key];
+      if (group.leader < 0) group = {AccuracyGroup::State::led, study_case.index};
+    }
   }
   for (const StudyCase& study_case : plan_.cases) {
     if (!mine(study_case.index) || !finished_[study_case.index].is_null()) continue;

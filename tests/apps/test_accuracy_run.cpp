@@ -169,6 +169,82 @@ TEST(Accuracy, AToleranceThatCannotBeMetEndsWithMetFalseAndTheBlockingComponent)
   }
 }
 
+/// The cracked p = 3 cantilever graded towards its front, driven at `amplitude` N, with a tolerance on
+/// A1 that its own setting misses (0.29 %) and order 4 meets (0.12 %).
+std::string graded_toleranced(const std::string& amplitude) {
+  std::string text = forced("reduced", "") + "accuracy: {tolerance: 0.002, quantities: [A1]}\n";
+  const std::string mesh = "cells: [10, 2, 1], order: 1, grading: none", graded = "cells: [20, 2, 1], order: 3, grading: always";
+  text.replace(text.find(mesh), mesh.size(), graded);
+  const std::string drive = "amplitude: 20.0";
+  text.replace(text.find(drive), drive.size(), "amplitude: " + amplitude);
+  return text;
+}
+
+// A run whose tolerance loop refined (to order 4) leaves the setting it reached in run.json; a run of
+// the same mesh at another drive started there (`--accuracy-start`, as a study's cases that share a
+// mesh are) meets the tolerance at that setting with fewer refinement runs, and - the bilinear
+// oscillator being homogeneous in the drive - has the same A2/A1 and 1.5 times the A1 to round-off.
+TEST(Accuracy, ARunStartsItsToleranceLoopWhereAnEarlierRunOfTheSameMeshEnded) {
+  const cli_testing::Result leader = run_scene_text("leader", graded_toleranced("20.0"));
+  ASSERT_EQ(leader.exit_code, 0) << leader.output;
+  const nlohmann::json first = read_json(scratch() / "leader" / "spectrum.json");
+  ASSERT_TRUE(first["accuracy"]["met"].get<bool>()) << first["accuracy"].dump(1);
+  const nlohmann::json reached = read_json(scratch() / "leader" / "run.json")["accuracy"]["reached"];
+  EXPECT_EQ(reached, first["accuracy"]["reached"]);
+  EXPECT_EQ(reached["order"], 4) << reached;
+
+  const std::string start = (scratch() / "leader" / "run.json").string();
+  const cli_testing::Result follower =
+      run_scene_text("follower", graded_toleranced("30.0"), "--accuracy-start " + start);
+  ASSERT_EQ(follower.exit_code, 0) << follower.output;
+  EXPECT_NE(follower.output.find("accuracy: the tolerance starts at order 4"), std::string::npos) << follower.output;
+  const nlohmann::json second = read_json(scratch() / "follower" / "spectrum.json");
+  EXPECT_TRUE(second["accuracy"]["met"].get<bool>());
+  EXPECT_EQ(second["accuracy"]["reached"], reached);
+  EXPECT_EQ(second["accuracy"]["started_from"], start);
+  EXPECT_LT(second["accuracy"]["runs"].size(), first["accuracy"]["runs"].size());
+  const nlohmann::json& a = first["accuracy"]["probes"]["tip"];
+  const nlohmann::json& b = second["accuracy"]["probes"]["tip"];
+  EXPECT_NEAR(b["A2/A1"]["value"].get<double>() / a["A2/A1"]["value"].get<double>(), 1.0, 1e-9);
+  EXPECT_NEAR(b["A1"]["value"].get<double>() / a["A1"]["value"].get<double>(), 1.5, 1e-9);
+  EXPECT_NEAR(b["A1"]["error"].get<double>(), a["A1"]["error"].get<double>(), 1e-9);
+
+  // Bad start files are refused before anything runs, naming the file and what was expected.
+  const cli_testing::Result missing =
+      run_scene_text("start-missing", graded_toleranced("30.0"), "--accuracy-start " + (scratch() / "none.json").string());
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.output.find("none.json"), std::string::npos) << missing.output;
+  const std::string transient = (scratch() / "leader" / "transient.json").string();
+  const cli_testing::Result unreached =
+      run_scene_text("start-unreached", graded_toleranced("30.0"), "--accuracy-start " + transient);
+  EXPECT_EQ(unreached.exit_code, 2) << unreached.output;
+  EXPECT_NE(unreached.output.find("transient.json: accuracy.reached: expected the setting an estimate reached"),
+            std::string::npos)
+      << unreached.output;
+  EXPECT_FALSE(fs::exists(scratch() / "start-unreached" / "run.json"));
+  // Without a tolerance there is no loop to start: the file is not used, and the run says so.
+  const cli_testing::Result untoleranced = run_scene_text("start-unused", forced("reduced", ""), "--accuracy-start " + start);
+  ASSERT_EQ(untoleranced.exit_code, 0) << untoleranced.output;
+  EXPECT_NE(untoleranced.output.find("not used: the estimate has no tolerance to reach"), std::string::npos)
+      << untoleranced.output;
+}
+
+// At the highest order on a mesh that is not graded there is no finer mesh the loop can run (no
+// front layers to add): it stops there, met: false, and names it (it once failed with a message
+// about mesh.box.grading, exit 2, on the front-layer override it tried).
+TEST(Accuracy, AnUngradedMeshAtTheHighestOrderBlocksTheToleranceAndSaysWhy) {
+  std::string text = forced("reduced", "") + "accuracy: {tolerance: 0.003}\n";
+  const std::string mesh = "order: 1, grading: none";
+  text.replace(text.find(mesh), mesh.size(), "order: 4, grading: none");
+  const cli_testing::Result result = run_scene_text("ungraded-p4", text);
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const nlohmann::json accuracy = read_json(scratch() / "ungraded-p4" / "spectrum.json")["accuracy"];
+  EXPECT_FALSE(accuracy["met"].get<bool>());
+  EXPECT_NE(accuracy["blocking"].get<std::string>().find("not graded"), std::string::npos) << accuracy["blocking"];
+  EXPECT_EQ(accuracy["reached"]["order"], 4);
+  EXPECT_EQ(accuracy["reached"]["layers"], 0);
+}
+
 // The full model stays the reference: data/gmsh-cracked-box.yaml's default route (the reduced model
 // on the scene's Gmsh mesh) and the full explicit model on the same mesh, both over the same 12
 // periods (no steady-state stop, so both analyse the same window). Their difference is the reduced

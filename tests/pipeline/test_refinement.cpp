@@ -3,11 +3,13 @@
 // per second, with its limits and the budget), the tolerance loop, and the temporary folders of the
 // refinement runs.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
+#include "core/errors.hpp"
 #include "pipeline/refinement.hpp"
 
 namespace crackle::pipeline {
@@ -114,6 +116,94 @@ TEST(Refinement, TheToleranceLoopRefinesUntilMetOrBlockedOrUnverified) {
   EXPECT_NE(outcome.blocking.find("not verified"), std::string::npos);
   // No tolerance: nothing refined, nothing said.
   EXPECT_FALSE(reach_tolerance(std::nullopt, setting, summary, refine, summarize, describe, out).met);
+}
+
+// At the highest order the mesh refines by front layers only where the box is graded (always): on
+// one that is not, the mesh choice is blocked, and the loop stops there naming it when it is the
+// best choice (not when another component's error per second is larger).
+TEST(Refinement, FrontLayersOnlyOnAGradedBox) {
+  scene::Scene graded, uniform;
+  graded.grading.mode = "always";
+  uniform.grading.mode = "none";
+  Setting setting;
+  setting.order = 3;
+  EXPECT_TRUE(mesh_choice(setting, uniform, 1.0).blocked.empty());  // an order up needs no grading
+  setting.order = kHighestOrder;
+  EXPECT_TRUE(mesh_choice(setting, graded, 1.0).blocked.empty());
+  EXPECT_EQ(mesh_choice(setting, graded, 1.0).next.layers, 1);
+  const RefinementChoice blocked = mesh_choice(setting, uniform, 1.0);
+  EXPECT_NE(blocked.blocked.find("not graded"), std::string::npos) << blocked.blocked;
+  SettingSummary summary;
+  summary.worst = 0.1;
+  summary.largest = {{"mesh", 0.1}, {"modes", 0.001}};
+  Setting band = setting;
+  band.band = 1;
+  std::string blocking;
+  EXPECT_FALSE(choose_refinement({blocked, {"modes", band, 1.0, ""}}, summary, 100.0, "none", blocking));
+  EXPECT_EQ(blocking, blocked.blocked);
+  summary.largest["modes"] = 0.5;
+  const std::optional<Setting> next = choose_refinement({blocked, {"modes", band, 1.0, ""}}, summary, 100.0, "none", blocking);
+  ASSERT_TRUE(next);
+  EXPECT_EQ(next->band, 1);
+}
+
+// --accuracy-start: the setting an earlier estimate reached (run.json or sweep.json
+// `accuracy.reached`, as setting_json writes it) starts the loop; bad files are refused with the
+// file, the key and what was expected; without a tolerance the file is not used, and that is said.
+TEST(Refinement, TheToleranceLoopStartsWhereAnEarlierEstimateEnded) {
+  const fs::path directory = fs::temp_directory_path() / ("crackle-start-" + std::to_string(::getpid()));
+  fs::create_directories(directory);
+  Setting reached;
+  reached.order = 4;
+  reached.layers = 1;
+  reached.band = 2;
+  reached.window = 1;
+  std::ofstream(directory / "run.json") << nlohmann::json{{"accuracy", {{"reached", setting_json(reached)}}}}.dump();
+  Setting own;
+  own.order = 3;
+  EstimatePlan plan;
+  plan.estimate = true;
+  plan.tolerance = 0.01;
+  std::ostringstream out;
+  EXPECT_EQ(tolerance_start(own, "", plan, true, out).key(), own.key());
+  EXPECT_EQ(tolerance_start(own, directory / "run.json", plan, true, out).key(), reached.key());
+  EXPECT_NE(out.str().find("the tolerance starts at order 4, front layers +1, band x4"), std::string::npos) << out.str();
+  // Below the scene's own order, or layers on a Gmsh mesh: not this mesh's setting.
+  own.order = 4;
+  EXPECT_NO_THROW(tolerance_start(own, directory / "run.json", plan, true, out));
+  EXPECT_THROW(tolerance_start(own, directory / "run.json", plan, false, out), InputError);
+  own.order = 5;
+  try {
+    tolerance_start(own, directory / "run.json", plan, true, out);
+    ADD_FAILURE() << "a setting below the scene's order was taken";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("run.json: accuracy.reached.order: expected at least the scene's element "
+                                             "order 5"), std::string::npos) << error.what();
+  }
+  own.order = 3;
+  const auto refused = [&](const std::string& text) {
+    std::ofstream(directory / "bad.json") << text;
+    try {
+      tolerance_start(own, directory / "bad.json", plan, true, out);
+    } catch (const InputError& error) {
+      return std::string(error.what());
+    }
+    return std::string("(taken)");
+  };
+  EXPECT_NE(refused("{\"steps\": 100}").find("bad.json: accuracy.reached: expected the setting an estimate reached"),
+            std::string::npos);
+  EXPECT_NE(refused("not json").find("bad.json: expected the JSON of an earlier crackle run or sweep"),
+            std::string::npos);
+  EXPECT_NE(refused("{\"accuracy\": {\"reached\": {\"order\": 4, \"layers\": -1}}}")
+                .find("accuracy.reached.layers: expected an integer from 0 to 16, got -1"),
+            std::string::npos);
+  EXPECT_THROW(tolerance_start(own, directory / "missing.json", plan, true, out), IoError);
+  // No tolerance: the scene's own setting, with a note.
+  plan.tolerance.reset();
+  std::ostringstream note;
+  EXPECT_EQ(tolerance_start(own, directory / "run.json", plan, true, note).key(), own.key());
+  EXPECT_NE(note.str().find("not used"), std::string::npos) << note.str();
+  fs::remove_all(directory);
 }
 
 TEST(Refinement, RefinementFoldersAreTemporaryAndTheChosenOneIsAdopted) {

@@ -1,5 +1,6 @@
 """Result arrays: the documented shapes and units, the mesh, and two runs in one process."""
 import numpy as np
+import pytest
 
 import crackle
 from conftest import data
@@ -67,6 +68,19 @@ def test_run_and_sweep_arrays():
     assert points >= 20 and (curve.frequency_hz > 0).all()
     assert curve.curves["tip"]["A1"].shape == (points,) and curve.curves["tip"]["units"]["A1"] == "m"
     assert curve.nbytes() > 0
+
+
+def test_a_run_starts_its_tolerance_where_an_earlier_result_ended():
+    """accuracy_start takes an earlier RunResult (its run.json): one whose estimate reached no setting
+    is refused before the run starts, naming the file and the key."""
+    unestimated = crackle.run(small_beam(), quiet=True)  # accuracy.estimate off: no accuracy.reached
+    toleranced = small_beam()
+    toleranced.set("accuracy.estimate", "auto")
+    toleranced.set("accuracy.tolerance", "0.01")
+    with pytest.raises(crackle.SceneError, match=r"run\.json: accuracy\.reached: expected the setting"):
+        crackle.run(toleranced, quiet=True, accuracy_start=unestimated)
+    with pytest.raises(crackle.SceneError, match=r"sweep\.json: accuracy\.reached"):
+        crackle.sweep(toleranced, quiet=True, accuracy_start=crackle.sweep(small_beam(), quiet=True))
 
 
 def test_two_runs_in_one_process_are_identical():

@@ -1,10 +1,13 @@
 // A stand-in for the `crackle` executable in study tests: `fake_crackle modal|run SCENE -o DIR
-// [--modal-cache C]` validates the scene like crackle does and writes modal.json (modal) or
+// [--modal-cache C] [--overwrite] [--accuracy-start FILE]` validates the scene like crackle does and writes modal.json (modal) or
 // spectrum.json and run.json, and modal.json if the scene has a modal: section (run), with the
 // JSON contracts of the real commands, from closed-form
 // "frequencies" of the scene. Test hooks, by environment:
 //   CRACKLE_FAKE_MARKER    file to which each run appends "<command> <case folder> <parent pid>",
-//                          and each modal cache access "cache-solve|cache-hit <cache folder>"
+//                          each modal cache access "cache-solve|cache-hit <cache folder>" and each
+//                          --accuracy-start "accuracy-start <case folder> <file>"
+// With accuracy.tolerance, run.json's accuracy says the setting its tolerance loop reached: the
+// --accuracy-start file's (which must hold one), else one element order above the scene's.
 //   CRACKLE_FAKE_SLEEP_MS  time each run takes
 //   CRACKLE_FAKE_TRAILER   a line written to stderr after the error line of a failing command
 // `run` writes progress lines to stderr the way crackle does ('\r', no line end), so a failure's
@@ -71,9 +74,14 @@ int main(int argc, char** argv) {
       throw crackle::InputError("usage: fake_crackle modal|run SCENE -o DIR [--modal-cache C]");
     const std::string command = argv[1], scene_path = argv[2];
     const fs::path out = argv[4];
-    fs::path cache;
-    if (argc >= 7 && std::string(argv[5]) == "--modal-cache") cache = argv[6];
+    fs::path cache, accuracy_start;
+    for (int i = 5; i + 1 < argc; ++i) {
+      if (std::string(argv[i]) == "--modal-cache") cache = argv[i + 1];
+      if (std::string(argv[i]) == "--accuracy-start") accuracy_start = argv[i + 1];
+    }
     mark(command + " " + fs::path(scene_path).parent_path().string() + " " + std::to_string(::getppid()));
+    if (!accuracy_start.empty())
+      mark("accuracy-start " + fs::path(scene_path).parent_path().string() + " " + accuracy_start.string());
     if (std::getenv("OMPI_COMM_WORLD_SIZE"))
       throw crackle::InputError("the MPI launcher's environment leaked into a case");
     if (const char* sleep = std::getenv("CRACKLE_FAKE_SLEEP_MS"))
@@ -153,7 +161,15 @@ int main(int argc, char** argv) {
           {{"excitation_hz", excitation},
            {"probes", {{"tip", {{"component", "z"}, {"harmonics", harmonics}, {"indices", indices}}}}},
            {"accuracy", accuracy}});
-      crackle::io::write_json(out / "run.json", {{"steps", 100}});
+      json run = {{"steps", 100}};
+      if (scene.accuracy.tolerance) {
+        json reached = {{"order", scene.box.order + 1}, {"layers", 0}, {"band", 0},  {"steps", 0},
+                        {"penalty", 0}, {"harmonics", 0}, {"window", 0}};
+        if (!accuracy_start.empty())  // the leader's run.json, read as crackle reads it
+          reached = json::parse(crackle::io::read_file(accuracy_start)).at("accuracy").at("reached");
+        run["accuracy"] = {{"estimated", true}, {"met", true}, {"reached", reached}};  // run.json's summary
+      }
+      crackle::io::write_json(out / "run.json", run);
     } else if (command != "modal") {
       throw crackle::InputError("unknown command '" + command + "'");
     }

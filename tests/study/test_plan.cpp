@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <iostream>
+#include <map>
 #include <set>
 #include <nlohmann/json.hpp>
 
@@ -416,6 +417,41 @@ TEST(StudyPlan, CasesOnTheRoutesOwnMeshMeshThemselves) {
   }
   const StudyPlan written = plan_study(base_scene() + "transient:\n  model: full\n" + transient, "b.yaml");
   EXPECT_TRUE(written.shares_grid_lines);
+}
+
+// The cases that share a mesh (they differ in the drive, the damping, the spectrum or the sweep)
+// share an accuracy key: the first refines to the tolerance, the others start where it ended. Another
+// crack is another mesh; a case without a tolerance to reach has no key, so it never waits.
+TEST(StudyPlan, TheAccuracyKeyGroupsTheCasesOfOneMeshThatHaveATolerance) {
+  const auto transient = [](const std::string& model) {
+    return "transient:\n  model: " + model +
+           "\n  excitation: {face: x+, direction: z, amplitude: 1.0, frequency: 100}\n"
+           "  damping: {ratio: 0.01, at: 100}\n  periods: 2\n  probes:\n    - {name: tip, point: [0.2, 0.01, 0.01]}\n"
+           "spectrum: {harmonics: 3}\n";
+  };
+  const std::string vary = "study:\n  vary:\n    transient.excitation.amplitude: [1, 2]\n"
+                           "    transient.damping.ratio: [0.01, 0.02]\n"
+                           "    crack.region.z: [[0.007, 0.01], [0.006, 0.01]]\n  outputs: [spectrum]\n";
+  const StudyPlan toleranced =
+      plan_study(base_scene() + transient("reduced") + "accuracy: {tolerance: 0.01}\n" + vary, "b.yaml");
+  ASSERT_EQ(toleranced.cases.size(), 8u);
+  std::map<std::string, std::set<std::string>> keys_by_crack;
+  for (const StudyCase& study_case : toleranced.cases) {
+    EXPECT_FALSE(study_case.accuracy_key.empty());
+    for (const scene::Override& change : study_case.overrides)
+      if (change.path == "crack.region.z") keys_by_crack[change.value].insert(study_case.accuracy_key);
+  }
+  ASSERT_EQ(keys_by_crack.size(), 2u);
+  for (const auto& [crack, keys] : keys_by_crack) EXPECT_EQ(keys.size(), 1u) << crack;
+  EXPECT_NE(*keys_by_crack.begin()->second.begin(), *keys_by_crack.rbegin()->second.begin());
+  // transient.model: auto has the route's tolerance (0.01) without an accuracy section.
+  const StudyPlan automatic = plan_study(base_scene() + transient("auto") + vary, "b.yaml");
+  EXPECT_FALSE(automatic.cases[0].accuracy_key.empty());
+  // No tolerance to reach: an explicit reduced model without one, or the estimate off.
+  const StudyPlan reduced = plan_study(base_scene() + transient("reduced") + vary, "b.yaml");
+  const StudyPlan off = plan_study(base_scene() + transient("auto") + "accuracy: {estimate: off}\n" + vary, "b.yaml");
+  for (const StudyPlan* plan : {&reduced, &off})
+    for (const StudyCase& study_case : plan->cases) EXPECT_TRUE(study_case.accuracy_key.empty());
 }
 
 TEST(StudyPlan, YamlValuesAsJson) {

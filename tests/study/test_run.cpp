@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "core/errors.hpp"
+#include "scene/scene.hpp"
 #include "study/results.hpp"
 #include "study/study.hpp"
 
@@ -341,6 +342,62 @@ TEST(StudyRun, ModalCacheIsPrimedOncePerKey) {
   ASSERT_EQ(run_quietly(uncached), 0);
   EXPECT_EQ(workspace.marks("cache-").size(), 10u);
   EXPECT_EQ(read(workspace.root / "uncached/study.csv"), table);
+}
+
+// The cases of one mesh with an accuracy tolerance (three drive amplitudes per crack) refine once:
+// the first case of each crack runs its tolerance loop from the scene's setting, the others wait for
+// it and start theirs where it ended (`--accuracy-start` its run.json, which must exist when they
+// start: the fake reads it). A rerun after a lost follower still starts it from its leader.
+TEST(StudyRun, TheCasesOfOneMeshRefineOnceAndTheOthersStartWhereTheFirstEnded) {
+  Workspace workspace("accuracy",
+                      "transient:\n  model: reduced\n"
+                      "  excitation: {point: [0.2, 0.01, 0.01], direction: z, amplitude: 10.0, frequency: 100}\n"
+                      "  periods: 4\n  probes:\n    - {name: tip, point: [0.2, 0.01, 0.01]}\n"
+                      "spectrum: {harmonics: 3}\n"
+                      "accuracy: {tolerance: 0.01}\n"
+                      "study:\n  vary:\n    crack.region.z: [[0.007, 0.01], [0.005, 0.01]]\n"
+                      "    transient.excitation.amplitude: [10, 20, 30]\n  outputs: [spectrum]\n");
+  const ScopedEnvironment environment({{"CRACKLE_FAKE_MARKER", workspace.marker.string()}});
+  ASSERT_EQ(run_quietly(options_for(workspace, "out", 2)), 0);
+  const fs::path cases = workspace.root / "out/cases";
+  std::map<double, int> leaders;  // crack's lower edge -> its leader case
+  std::vector<std::pair<int, double>> followers;
+  for (int index = 0; index < 6; ++index) {
+    char name[8];
+    std::snprintf(name, sizeof name, "%04d", index);
+    const json record = json::parse(read(cases / name / "case.json"));
+    ASSERT_EQ(record["status"], "ok") << record.dump();
+    const double edge = scene::load_scene((cases / name / "scene.yaml").string()).crack->region[2][0];
+    if (record.contains("accuracy_start")) {
+      followers.push_back({index, edge});
+    } else {
+      EXPECT_EQ(leaders.count(edge), 0u) << "two cases of one mesh refined from the scene's setting";
+      leaders[edge] = index;
+    }
+  }
+  ASSERT_EQ(leaders.size(), 2u);
+  ASSERT_EQ(followers.size(), 4u);
+  for (const auto& [index, edge] : followers) {
+    char name[8], leader[8];
+    std::snprintf(name, sizeof name, "%04d", index);
+    std::snprintf(leader, sizeof leader, "%04d", leaders.at(edge));
+    const json record = json::parse(read(cases / name / "case.json"));
+    const fs::path start = cases / leader / "run.json";
+    EXPECT_EQ(record["accuracy_start"]["run"], start.string());
+    // It reached the setting its leader reached (the fake's leader: one order above the scene's).
+    EXPECT_EQ(json::parse(read(cases / name / "run.json"))["accuracy"]["reached"]["order"], 2);
+  }
+  EXPECT_EQ(workspace.marks("accuracy-start").size(), 4u);
+  // A follower lost (its case.json removed) reruns from its leader, which a rerun does not redo.
+  const auto [lost, lost_edge] = followers.front();
+  char lost_name[8];
+  std::snprintf(lost_name, sizeof lost_name, "%04d", lost);
+  fs::remove(cases / lost_name / "case.json");
+  const std::size_t before = workspace.marks("run").size();
+  ASSERT_EQ(run_quietly(options_for(workspace, "out", 2)), 0);
+  EXPECT_EQ(workspace.marks("run").size(), before + 1);
+  EXPECT_TRUE(json::parse(read(cases / lost_name / "case.json")).contains("accuracy_start"));
+  EXPECT_EQ(workspace.marks("accuracy-start").size(), 5u);
 }
 
 TEST(StudyRun, ChangedStudyRerunsOnlyTheChangedCases) {
