@@ -185,7 +185,10 @@ std::string graded_toleranced(const std::string& amplitude) {
 // mesh are) meets the tolerance at that setting with fewer refinement runs, and - the bilinear
 // oscillator being homogeneous in the drive - has the same A2/A1 and 1.5 times the A1 to round-off.
 TEST(Accuracy, ARunStartsItsToleranceLoopWhereAnEarlierRunOfTheSameMeshEnded) {
-  const cli_testing::Result leader = run_scene_text("leader", graded_toleranced("20.0"));
+  // Both share a modal cache, as a study's cases do: the follower's order-4 run reads its modes and
+  // reduction from it.
+  const std::string cache = " --modal-cache " + (scratch() / "start-cache").string();
+  const cli_testing::Result leader = run_scene_text("leader", graded_toleranced("20.0"), cache);
   ASSERT_EQ(leader.exit_code, 0) << leader.output;
   const nlohmann::json first = read_json(scratch() / "leader" / "spectrum.json");
   ASSERT_TRUE(first["accuracy"]["met"].get<bool>()) << first["accuracy"].dump(1);
@@ -195,7 +198,7 @@ TEST(Accuracy, ARunStartsItsToleranceLoopWhereAnEarlierRunOfTheSameMeshEnded) {
 
   const std::string start = (scratch() / "leader" / "run.json").string();
   const cli_testing::Result follower =
-      run_scene_text("follower", graded_toleranced("30.0"), "--accuracy-start " + start);
+      run_scene_text("follower", graded_toleranced("30.0"), "--accuracy-start " + start + cache);
   ASSERT_EQ(follower.exit_code, 0) << follower.output;
   EXPECT_NE(follower.output.find("accuracy: the tolerance starts at order 4"), std::string::npos) << follower.output;
   const nlohmann::json second = read_json(scratch() / "follower" / "spectrum.json");
