@@ -69,9 +69,19 @@ nlohmann::json solve(const fs::path& directory, const std::string& scene) {
   return nlohmann::json::parse(file);
 }
 
+// The reference frequencies of beam_scene: the grid [16, 4, 2] at order 4 (graded as crackle modal
+// grades it), extrapolated by its own levels (orders 2, 3, 4: value x (1 + delta / safety factor) of
+// its modal.json accuracy.pairs[mode][field].components.mesh, the levels' delta where it has a check
+// level, which only widens its estimate). Converged by hand once (a 62 s, 8.8 GB solve, too long for
+// the suite; docs/benchmarks.md 11.9): the grid [8, 4, 2] extrapolated the same way agrees to
+// 1.2e-4 on modes 1-2 and 2.4e-4 on mode 3, under a third of the smallest true error of the coarse
+// grids below (7.6e-4). Rows: f_uncracked, f_open, f_bilinear [Hz]; columns: modes 1-3.
+constexpr double kReferenceHz[3][3] = {{835.9293307, 1629.885741, 5011.616366},
+                                       {776.8824708, 1585.825274, 4995.275966},
+                                       {805.3495419, 1607.567013, 5003.433206}};
+
 // The effectivity of every frequency of a coarse grid at order 4 (levels 2, 3, 4 and the check level)
-// against the grid twice as fine in each direction at order 4, extrapolated by its own levels (the
-// reference), with whether it was verified.
+// against the reference above, with whether it was verified.
 struct Effectivity {
   std::string field;
   std::size_t mode = 0;
@@ -79,27 +89,22 @@ struct Effectivity {
   bool verified = false;
   std::string where;
 };
-std::vector<Effectivity> effectivities(const std::string& name, const std::string& coarse_cells,
-                                       const std::string& fine_cells) {
+std::vector<Effectivity> effectivities(const std::string& name, const std::string& coarse_cells) {
   const fs::path directory =
       fs::temp_directory_path() / ("crackle-modal-effectivity-" + name + "-" + std::to_string(::getpid()));
-  const nlohmann::json fine = solve(directory / "fine", beam_scene(fine_cells, 4));
   const nlohmann::json coarse = solve(directory / "coarse", beam_scene(coarse_cells, 4));
   fs::remove_all(directory);
-  EXPECT_TRUE(fine["accuracy"]["estimated"].get<bool>()) << fine["accuracy"].dump();
+  EXPECT_TRUE(coarse["accuracy"]["estimated"].get<bool>()) << coarse["accuracy"].dump();
   std::vector<Effectivity> out;
-  for (const char* field : {"f_uncracked_hz", "f_open_hz", "f_bilinear_hz"}) {
+  const char* fields[3] = {"f_uncracked_hz", "f_open_hz", "f_bilinear_hz"};
+  for (int f = 0; f < 3; ++f) {
     for (std::size_t mode = 0; mode < 3; ++mode) {
-      const nlohmann::json& reference = fine["accuracy"]["pairs"][mode][field];
-      const nlohmann::json& mesh = reference["components"]["mesh"];
-      // The reference's own levels extrapolated (its check level, if any, only widens its estimate).
-      const double delta = (mesh.contains("check") ? mesh["check"]["levels_delta"] : mesh["delta"]).get<double>();
-      const double truth = reference["value"].get<double>() * (1.0 + delta / mesh["safety_factor"].get<double>());
-      const nlohmann::json& estimate = coarse["accuracy"]["pairs"][mode][field];
+      const double truth = kReferenceHz[f][mode];
+      const nlohmann::json& estimate = coarse["accuracy"]["pairs"][mode][fields[f]];
       const double value = estimate["value"].get<double>();
-      out.push_back({field, mode, estimate["error"].get<double>() / (std::abs(truth - value) / value),
+      out.push_back({fields[f], mode, estimate["error"].get<double>() / (std::abs(truth - value) / value),
                      estimate["verified"].get<bool>(),
-                     std::string(field) + " mode " + std::to_string(mode + 1) + ": " + estimate.dump()});
+                     std::string(fields[f]) + " mode " + std::to_string(mode + 1) + ": " + estimate.dump()});
     }
   }
   return out;
@@ -109,7 +114,7 @@ std::vector<Effectivity> effectivities(const std::string& name, const std::strin
 // bilinear frequencies at most 3 times (DETECTION.md's test of effectivity). Measured: 2.04-3.51
 // (docs/benchmarks.md 11.9).
 TEST(ModalAccuracy, ACoarseGridsEstimateHoldsItsErrorAgainstAFinerGrid) {
-  for (const Effectivity& e : effectivities("8x2x1", "[8, 2, 1]", "[16, 4, 2]")) {
+  for (const Effectivity& e : effectivities("8x2x1", "[8, 2, 1]")) {
     if (!e.verified) continue;
     EXPECT_GE(e.effectivity, 1.0) << e.where;
     if (e.field == "f_bilinear_hz") EXPECT_LE(e.effectivity, 3.0) << e.where;
@@ -121,7 +126,7 @@ TEST(ModalAccuracy, ACoarseGridsEstimateHoldsItsErrorAgainstAFinerGrid) {
 // disagrees with them: every estimate covers its error, and the third mode is not verified. Measured:
 // 1.61-5.62; f_bilinear 1 verified at 3.29 (over the [1, 3] of DETECTION.md: an overestimate).
 TEST(ModalAccuracy, AGridTooCoarseForItsLevelsIsCaughtByTheCheckLevel) {
-  for (const Effectivity& e : effectivities("4x2x1", "[4, 2, 1]", "[8, 4, 2]")) {
+  for (const Effectivity& e : effectivities("4x2x1", "[4, 2, 1]")) {
     EXPECT_GE(e.effectivity, 1.0) << e.where;
     if (e.mode == 2) EXPECT_FALSE(e.verified) << e.where;
   }
