@@ -154,7 +154,7 @@ SettingEstimate estimate_setting(RefinementRuns& runs, const Setting& setting, c
 /// The next setting the tolerance refines to: the component with the largest error per second of
 /// its refinement run, or empty with `blocking` saying why none can go on.
 std::optional<Setting> refine(RefinementRuns& runs, const Setting& setting, const SettingSummary& summary, double budget_left,
-                              std::string& blocking) {
+                              std::optional<double> tolerance, std::string& blocking) {
   const Neighbours n = neighbours(setting, runs.box_mesh());
   std::vector<RefinementChoice> choices;
   const double here = runs.get(setting).wall_s;
@@ -168,7 +168,7 @@ std::optional<Setting> refine(RefinementRuns& runs, const Setting& setting, cons
   // A longer run on the same mesh: the model and modal stage are shared, so it costs about what the
   // twice-the-steps run did, times two for the longer steady state.
   choices.push_back({"window", n.window, 2.0 * runs.get(n.steps).wall_s});
-  return choose_refinement(choices, summary, budget_left, "none (no component has an error left)", blocking);
+  return choose_refinement(choices, summary, budget_left, "none (no component has an error left)", blocking, tolerance);
 }
 
 }  // namespace
@@ -223,7 +223,7 @@ void run_with_accuracy(const scene::Scene& scene, const RunRoute& route, const s
   const ToleranceOutcome outcome = reach_tolerance(
       plan.tolerance, setting, estimate.summary,
       [&](const Setting& from, std::string& blocking) {
-        return refine(runs, from, estimate.summary, scene.accuracy.budget_s - total.seconds(), blocking);
+        return refine(runs, from, estimate.summary, scene.accuracy.budget_s - total.seconds(), plan.tolerance, blocking);
       },
       [&](const Setting& at) {
         estimate = estimate_setting(runs, at, quantities);

@@ -229,13 +229,28 @@ RefinementChoice mesh_choice(const Setting& setting, const scene::Scene& scene, 
 }
 
 std::optional<Setting> choose_refinement(const std::vector<RefinementChoice>& choices, const SettingSummary& summary,
-                                         double budget_left, const std::string& nothing_left, std::string& blocking) {
+                                         double budget_left, const std::string& nothing_left, std::string& blocking,
+                                         std::optional<double> tolerance) {
+  const auto part = [&](const RefinementChoice& choice) {
+    const auto found = summary.largest.find(choice.name);
+    return found == summary.largest.end() ? 0.0 : found->second;
+  };
   const RefinementChoice* best = nullptr;
   double best_rate = -1.0;
-  for (const RefinementChoice& choice : choices) {
-    const auto found = summary.largest.find(choice.name);
-    const double rate = (found == summary.largest.end() ? 0.0 : found->second) / std::max(1e-3, choice.cost);
-    if (rate > best_rate) best_rate = rate, best = &choice;
+  // A component too small to meet the tolerance by itself is not refined first however cheap it is
+  // (a band at 0.007 % of an estimate of 0.29 % against 0.2 %: its run and its neighbours' bought
+  // nothing, and the loop's path followed the run times).
+  if (tolerance) {
+    for (const RefinementChoice& choice : choices) {
+      if (part(choice) > 0.0 && summary.worst - part(choice) <= *tolerance && (!best || choice.cost < best->cost))
+        best = &choice, best_rate = part(choice) / std::max(1e-3, choice.cost);
+    }
+  }
+  if (!best) {
+    for (const RefinementChoice& choice : choices) {
+      const double rate = part(choice) / std::max(1e-3, choice.cost);
+      if (rate > best_rate) best_rate = rate, best = &choice;
+    }
   }
   if (!best || best_rate <= 0.0) {
     blocking = nothing_left;

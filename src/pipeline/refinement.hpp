@@ -132,11 +132,14 @@ struct RefinementChoice {
 /// always: a run meshes it uniformly, so there are no front layers to add).
 RefinementChoice mesh_choice(const Setting& setting, const scene::Scene& scene, double cost);
 
-/// The choice with the largest error per second of its run, or empty with `blocking` saying why
-/// none can go on: no component with an error (`nothing_left`), the highest order reached, or a run
-/// that would exceed what is left of the budget.
+/// The choice with the largest error per second of its run - or, with a `tolerance`, the cheapest
+/// of those whose refinement alone could meet it (the largest estimate less the component's part at
+/// most the tolerance), where there are such - or empty with `blocking` saying why none can go on: no
+/// component with an error (`nothing_left`), the highest order reached, or a run that would exceed
+/// what is left of the budget.
 std::optional<Setting> choose_refinement(const std::vector<RefinementChoice>& choices, const SettingSummary& summary,
-                                         double budget_left, const std::string& nothing_left, std::string& blocking);
+                                         double budget_left, const std::string& nothing_left, std::string& blocking,
+                                         std::optional<double> tolerance = std::nullopt);
 
 /// How a tolerance loop ended.
 struct ToleranceOutcome {

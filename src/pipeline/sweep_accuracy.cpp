@@ -155,7 +155,7 @@ SettingEstimate estimate_setting(RefinementSweeps& sweeps, const Setting& settin
 /// The next setting the tolerance refines to: the component with the largest error per second of
 /// its refinement sweep, or empty with `blocking` saying why none can go on.
 std::optional<Setting> refine(RefinementSweeps& sweeps, const Setting& setting, const SettingSummary& summary,
-                              double budget_left, std::string& blocking) {
+                              double budget_left, std::optional<double> tolerance, std::string& blocking) {
   const Neighbours n = neighbours(setting, sweeps.box_mesh());
   std::vector<RefinementChoice> choices;
   const double here = sweeps.get(setting).wall_s;
@@ -168,7 +168,7 @@ std::optional<Setting> refine(RefinementSweeps& sweeps, const Setting& setting, 
   return choose_refinement(choices, summary, budget_left,
                            sweeps.box_mesh() && !n.coarse ? "mesh (not estimated below element order 3)"
                                                           : "none (no component has an error left)",
-                           blocking);
+                           blocking, tolerance);
 }
 
 }  // namespace
@@ -207,7 +207,7 @@ void sweep_with_accuracy(const scene::Scene& scene, const RunRoute& route, const
   const ToleranceOutcome outcome = reach_tolerance(
       plan.tolerance, setting, estimate.summary,
       [&](const Setting& from, std::string& blocking) {
-        return refine(sweeps, from, estimate.summary, scene.accuracy.budget_s - total.seconds(), blocking);
+        return refine(sweeps, from, estimate.summary, scene.accuracy.budget_s - total.seconds(), plan.tolerance, blocking);
       },
       [&](const Setting& at) {
         estimate = estimate_setting(sweeps, at, counted);

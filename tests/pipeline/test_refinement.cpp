@@ -69,6 +69,22 @@ TEST(Refinement, TheComponentWithTheLargestErrorPerSecondIsRefinedWithinItsLimit
   choices = {{"mesh", finer_mesh(layered), 1.0}};
   EXPECT_FALSE(choose_refinement(choices, summary, 600.0, "none", blocking));
   EXPECT_NE(blocking.find("front layers"), std::string::npos) << blocking;
+  // With a tolerance, a component that alone could meet it goes first, the cheapest of such: the
+  // estimate 0.017 against 0.006 - only the window (0.012) can bring it there, even at 1000 s; with
+  // none that could, the largest error per second as before.
+  summary.worst = 0.017;
+  choices = {{"mesh", finer_mesh(here), 100.0}, {"modes", n.band, 2.0}, {"window", n.window, 1000.0}};
+  next = choose_refinement(choices, summary, 6000.0, "none", blocking, 0.006);
+  ASSERT_TRUE(next);
+  EXPECT_EQ(next->window, 1);
+  summary.largest["mesh"] = 0.012;  // two could: the cheaper
+  next = choose_refinement(choices, summary, 6000.0, "none", blocking, 0.006);
+  ASSERT_TRUE(next);
+  EXPECT_EQ(next->order, kHighestOrder);
+  EXPECT_EQ(next->layers, 1);
+  next = choose_refinement(choices, summary, 6000.0, "none", blocking, 0.001);  // none could
+  ASSERT_TRUE(next);
+  EXPECT_EQ(next->band, 1);  // 0.001 / 2 s beats 0.012 / 100 s and 0.012 / 1000 s
   // Nothing with an error left.
   summary.largest.clear();
   EXPECT_FALSE(choose_refinement({{"modes", n.band, 1.0}}, summary, 600.0, "nothing left", blocking));
