@@ -142,9 +142,20 @@ void RefinementFolders::adopt(const Setting& setting) const {
   }
 }
 
+namespace {
+
+/// The fields of `accuracy.reached`, as setting_json writes them and read_reached_setting reads them.
+constexpr std::pair<const char*, int Setting::*> kSettingFields[] = {
+    {"order", &Setting::order}, {"layers", &Setting::layers},     {"band", &Setting::band},
+    {"steps", &Setting::steps}, {"penalty", &Setting::penalty}, {"harmonics", &Setting::harmonics},
+    {"window", &Setting::window}};
+
+}  // namespace
+
 nlohmann::json setting_json(const Setting& setting) {
-  return {{"order", setting.order}, {"layers", setting.layers},   {"band", setting.band},     {"steps", setting.steps},
-          {"penalty", setting.penalty}, {"harmonics", setting.harmonics}, {"window", setting.window}};
+  nlohmann::json json = nlohmann::json::object();
+  for (const auto& [name, field] : kSettingFields) json[name] = setting.*field;
+  return json;
 }
 
 namespace {
@@ -167,17 +178,13 @@ Setting read_reached_setting(const fs::path& file) {
                      "sweep.json of a crackle run or sweep whose signatures were estimated), not found");
   }
   Setting setting;
-  const std::pair<const char*, int*> fields[] = {{"order", &setting.order}, {"layers", &setting.layers},
-                                                 {"band", &setting.band},   {"steps", &setting.steps},
-                                                 {"penalty", &setting.penalty}, {"harmonics", &setting.harmonics},
-                                                 {"window", &setting.window}};
-  for (const auto& [name, field] : fields) {
+  for (const auto& [name, field] : kSettingFields) {
     const nlohmann::json& value = reached->contains(name) ? (*reached)[name] : nlohmann::json();
     if (!value.is_number_integer() || value.get<int>() < 0 || value.get<int>() > 16) {
       throw InputError(file.string() + ": accuracy.reached." + name + ": expected an integer from 0 to 16, got " +
                        (value.is_null() ? std::string("nothing") : value.dump()));
     }
-    *field = value.get<int>();
+    setting.*field = value.get<int>();
   }
   return setting;
 }
@@ -224,6 +231,10 @@ RefinementChoice mesh_choice(const Setting& setting, const scene::Scene& scene, 
     choice.blocked = "mesh (the highest element order, " + std::to_string(kHighestOrder) +
                      ", is reached on a mesh that is not graded: finer cells, mesh.box.cells, or mesh.box.grading: "
                      "always, whose front layers the refinement adds)";
+  } else if (choice.next.layers > kMostExtraLayers) {
+    choice.blocked = "mesh (the highest element order, " + std::to_string(kHighestOrder) + ", and " +
+                     std::to_string(kMostExtraLayers) + " more front layers are reached; finer cells: mesh.box.cells "
+                     "with transient.model: reduced)";
   }
   return choice;
 }
@@ -258,12 +269,6 @@ std::optional<Setting> choose_refinement(const std::vector<RefinementChoice>& ch
   }
   if (!best->blocked.empty()) {
     blocking = best->blocked;
-    return std::nullopt;
-  }
-  if (best->name == "mesh" && best->next.layers > kMostExtraLayers) {
-    blocking = "mesh (the highest element order, " + std::to_string(kHighestOrder) + ", and " +
-               std::to_string(kMostExtraLayers) + " more front layers are reached; finer cells: mesh.box.cells with "
-               "transient.model: reduced)";
     return std::nullopt;
   }
   if (best->name == "window" && best->next.window > kMostWindowRefinements) {

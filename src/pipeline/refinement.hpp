@@ -129,14 +129,15 @@ struct RefinementChoice {
 
 /// The mesh's refinement from `setting` at cost `cost` [s]: one order up, or at the highest order one
 /// more front layer - blocked where the scene's box is not graded (mesh.box.grading other than
-/// always: a run meshes it uniformly, so there are no front layers to add).
+/// always: a run meshes it uniformly, so there are no front layers to add) or past the last layer
+/// (kMostExtraLayers).
 RefinementChoice mesh_choice(const Setting& setting, const scene::Scene& scene, double cost);
 
 /// The choice with the largest error per second of its run - or, with a `tolerance`, the cheapest
 /// of those whose refinement alone could meet it (the largest estimate less the component's part at
 /// most the tolerance), where there are such - or empty with `blocking` saying why none can go on: no
-/// component with an error (`nothing_left`), the highest order reached, or a run that would exceed
-/// what is left of the budget.
+/// component with an error (`nothing_left`), a choice that is `blocked` (mesh_choice), the last
+/// tightening of the steady state, or a run that would exceed what is left of the budget.
 std::optional<Setting> choose_refinement(const std::vector<RefinementChoice>& choices, const SettingSummary& summary,
                                          double budget_left, const std::string& nothing_left, std::string& blocking,
                                          std::optional<double> tolerance = std::nullopt);

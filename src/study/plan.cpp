@@ -235,10 +235,6 @@ bool format_has_grid_lines() {
 
 const char* const kAxes[3] = {"x", "y", "z"};
 
-}  // namespace
-
-namespace {
-
 /// StudyCase::accuracy_key of a case document.
 std::string accuracy_key(const YAML::Node& document) {
   YAML::Node key_document = copy_of(document);

@@ -138,6 +138,7 @@ struct Job {
   std::size_t next = 0;  ///< the command running is commands[next - 1]
   ChildProcess child;
   std::uintmax_t log_offset = 0;  ///< size of log.txt when the running command started
+  json accuracy_start = json::object();  ///< command -> the --accuracy-start file it was given
   Clock::time_point start;
 };
 
@@ -145,13 +146,6 @@ struct Job {
 struct Group {
   enum class State { needs_primer, priming, primed } state = State::primed;
   int first_case = -1;
-};
-
-/// Scheduling state of the cases that share an accuracy key (StudyCase::accuracy_key): the first
-/// (the leader) refines to its tolerance alone; the others wait for it and start where it ended.
-struct AccuracyGroup {
-  enum class State { open, leading, led } state = State::open;
-  int leader = -1;
 };
 
 class StudyRun {
@@ -193,7 +187,9 @@ class StudyRun {
   std::vector<json> finished_;  ///< case.json of each done case, null while not done
   std::deque<int> pending_;     ///< this rank's cases to run, in order
   std::map<std::string, Group> groups_;
-  std::map<std::string, AccuracyGroup> accuracy_groups_;
+  /// The leader of each accuracy key (StudyCase::accuracy_key): the first case of it refines to its
+  /// tolerance alone; the others wait until it is done and start where it ended.
+  std::map<std::string, int> accuracy_leaders_;
   std::vector<Job> running_;
   std::map<int, fs::file_time_type> failed_before_;  ///< retry_failed: when the old failure was written
   Clock::time_point start_;
@@ -274,8 +270,11 @@ Job StudyRun::case_job(int index) {
     // The case folder holds the study's scene.yaml and log.txt: modal and run refuse such a folder
     // without --overwrite; sweep writes into any folder (it has no such flag).
     if (command != "sweep") argv.push_back("--overwrite");
-    if (command != "modal") {
-      for (std::string& argument : accuracy_start(index, command)) argv.push_back(std::move(argument));
+    if (const std::vector<std::string> start = command == "modal" ? std::vector<std::string>()
+                                                                  : accuracy_start(index, command);
+        !start.empty()) {
+      argv.insert(argv.end(), start.begin(), start.end());
+      job.accuracy_start[command] = start.back();
     }
     job.commands.push_back({command, argv});
   }
@@ -285,9 +284,9 @@ Job StudyRun::case_job(int index) {
 std::vector<std::string> StudyRun::accuracy_start(int index, const std::string& command) const {
   const std::string& key = plan_.cases[index].accuracy_key;
   if (key.empty()) return {};
-  const auto group = accuracy_groups_.find(key);
-  if (group == accuracy_groups_.end() || group->second.leader < 0 || group->second.leader == index) return {};
-  const fs::path file = case_path(group->second.leader) / (command == "sweep" ? "sweep.json" : "run.json");
+  const auto leader = accuracy_leaders_.find(key);
+  if (leader == accuracy_leaders_.end() || leader->second == index) return {};
+  const fs::path file = case_path(leader->second) / (command == "sweep" ? "sweep.json" : "run.json");
   std::error_code error;
   if (!fs::exists(file, error)) return {};
   try {
@@ -335,14 +334,9 @@ bool StudyRun::start_next() {
   // is done (or which leads it), else a primer for a key.
   for (auto it = pending_.begin(); it != pending_.end(); ++it) {
     if (groups_[plan_.cases[*it].modal_key].state != Group::State::primed) continue;
-    const std::string& accuracy_key = plan_.cases[*it].accuracy_key;
-    if (!accuracy_key.empty()) {
-      AccuracyGroup& group = accuracy_groups_[accuracy_key];
-      if (group.state == AccuracyGroup::State::leading) continue;
-      if (group.state == AccuracyGroup::State::open) {
-        group.state = AccuracyGroup::State::leading;
-        group.leader = *it;
-      }
+    if (const std::string& key = plan_.cases[*it].accuracy_key; !key.empty()) {
+      const auto [leader, first] = accuracy_leaders_.emplace(key, *it);
+      if (!first && finished_[leader->second].is_null()) continue;  // its leader is running
     }
     Job job = case_job(*it);
     pending_.erase(it);
@@ -383,18 +377,7 @@ void StudyRun::finish_case(Job& job, const std::string& failed_command, const st
   }
   record["wall_s"] = seconds_since(job.start);
   for (const auto& [name, value] : kept.items()) record[name] = value;
-  if (!study_case.accuracy_key.empty()) {
-    AccuracyGroup& group = accuracy_groups_[study_case.accuracy_key];
-    if (group.leader == job.case_index) {
-      group.state = AccuracyGroup::State::led;
-    } else {
-      for (const auto& command : job.commands) {  // where its tolerance loops started, if they did not at its own
-        const auto& argv = command.second;
-        const auto start = std::find(argv.begin(), argv.end(), "--accuracy-start");
-        if (start != argv.end() && start + 1 != argv.end()) record["accuracy_start"][command.first] = *(start + 1);
-      }
-    }
-  }
+  if (!job.accuracy_start.empty()) record["accuracy_start"] = job.accuracy_start;  // where its tolerance loops started
   io::write_json(job.folder / "case.json", record);  // last, atomically: the case is done
   finished_[job.case_index] = record;
   ++n_done_;
@@ -556,10 +539,8 @@ int StudyRun::run() {
   for (const StudyCase& study_case : plan_.cases) {
     // A case done before leads its accuracy group: the others start where its tolerance loop ended.
     if (!study_case.accuracy_key.empty() && !finished_[study_case.index].is_null() &&
-        finished_[study_case.index].value("status", "") == "ok") {
-      AccuracyGroup& group = accuracy_groups_[study_case.accuracy_key];
-      if (group.leader < 0) group = {AccuracyGroup::State::led, study_case.index};
-    }
+        finished_[study_case.index].value("status", "") == "ok")
+      accuracy_leaders_.emplace(study_case.accuracy_key, study_case.index);
   }
   for (const StudyCase& study_case : plan_.cases) {
     if (!mine(study_case.index) || !finished_[study_case.index].is_null()) continue;

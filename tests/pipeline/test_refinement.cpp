@@ -66,7 +66,9 @@ TEST(Refinement, TheComponentWithTheLargestErrorPerSecondIsRefinedWithinItsLimit
   EXPECT_NE(blocking.find("steady state tightened"), std::string::npos) << blocking;
   Setting layered = here;
   layered.layers = kMostExtraLayers;
-  choices = {{"mesh", finer_mesh(layered), 1.0}};
+  scene::Scene graded;
+  graded.grading.mode = "always";
+  choices = {mesh_choice(layered, graded, 1.0)};
   EXPECT_FALSE(choose_refinement(choices, summary, 600.0, "none", blocking));
   EXPECT_NE(blocking.find("front layers"), std::string::npos) << blocking;
   // With a tolerance, a component that alone could meet it goes first, the cheapest of such: the
