@@ -187,28 +187,82 @@ Component residue(const std::string& name, double value, double relative_residue
   return component;
 }
 
+Component window_tail(const std::string& name, double before, double previous, double value, double slowest_ratio) {
+  const bool undamped = !(slowest_ratio > 1.0) && !std::isnan(slowest_ratio);
+  const double change = std::isfinite(previous) ? value - previous : 0.0;
+  // Three times the last change, or what the slowest decay leaves of it where that is more.
+  const double cautious_factor = slowest_ratio > 1.0
+                                     ? std::max(kCautiousSafetyFactor, kSafetyFactor / (slowest_ratio - 1.0))
+                                     : kCautiousSafetyFactor;
+  Component component;
+  if (!std::isfinite(before)) {
+    component = one_refinement(name, value, value + change, 1.0, 0.0);
+    component.delta = cautious_factor * relative(change, value);
+    component.asymptotic = false;
+    component.reason = "fewer than three analysis windows (the change from the window before, " +
+                       number(cautious_factor, 3) + " times)";
+  } else {
+    component = three_level(name, before, previous, value, kOrderLevelRatio, kOrderRateMin, kOrderRateMax);
+    if (!std::isfinite(component.delta)) return component;
+    if (component.observed_order == 0.0 && component.ratio != 0.0) {
+      // Not geometric over the last windows (beats): bounded, not a failed refinement: counted as
+      // verified, marked not asymptotic.
+      component.delta = cautious_factor * relative(change, value);
+      component.verified = true;
+      component.reason = "the start transient's decay is not geometric over the last three windows (" +
+                         component.reason + "): " + number(cautious_factor, 3) + " times the last change";
+    } else if (component.ratio > 1.0 && slowest_ratio > 1.0 && component.ratio > slowest_ratio) {
+      component.delta = component.safety_factor * relative(change / (slowest_ratio - 1.0), value);
+      component.asymptotic = false;
+      component.reason = "the windows' decay ratio " + number(component.ratio, 3) + " is faster than the damping's " +
+                         "slowest decay allows (" + number(slowest_ratio, 3) + " per window): that ratio used";
+    } else if (!component.verified) {
+      component.verified = true;  // an observed rate out of range: Fs = 3, not asymptotic
+      component.reason = "the start transient's decay is not geometric over the last three windows (" +
+                         component.reason + ")";
+    }
+  }
+  component.bound_ratio = std::isfinite(slowest_ratio) ? slowest_ratio : 0.0;
+  if (undamped) {
+    component.delta = kCautiousSafetyFactor * relative(change, value);
+    component.safety_factor = kCautiousSafetyFactor;
+    component.verified = component.asymptotic = false;
+    component.reason = "the run has no damping: its start transient does not decay";
+  }
+  return component;
+}
+
 Estimate combine(const std::string& quantity, double value, std::vector<Component> components) {
   Estimate estimate;
   estimate.quantity = quantity;
   estimate.value = value;
-  double squares = 0.0;
+  double squares = 0.0, corrections = 0.0, margins = 0.0, cautious = 0.0;
   for (const Component& component : components) {
     if (std::isfinite(component.delta)) {
       estimate.sum += std::abs(component.delta);
+      estimate.signed_sum += component.delta;
       squares += component.delta * component.delta;
+      if (component.safety_factor < kCautiousSafetyFactor && component.safety_factor >= 1.0) {
+        const double correction = component.delta / component.safety_factor;
+        corrections += correction;
+        margins += (component.safety_factor - 1.0) * std::abs(correction);
+      } else {
+        cautious += std::abs(component.delta);
+      }
     }
     estimate.asymptotic = estimate.asymptotic && component.asymptotic;
     estimate.verified = estimate.verified && component.verified;
     if (!component.reason.empty() && !component.verified) estimate.reasons.push_back(component.name + ": " + component.reason);
   }
   estimate.rss = std::sqrt(squares);
+  estimate.error = std::abs(corrections) + margins + cautious;
   estimate.components = std::move(components);
   return estimate;
 }
 
 std::string estimate_line(const Estimate& estimate) {
   std::ostringstream line;
-  line << estimate.quantity << " = " << number(estimate.value, 5) << " ± " << number(100.0 * estimate.sum, 2) << " %";
+  line << estimate.quantity << " = " << number(estimate.value, 5) << " ± " << number(100.0 * estimate.error, 2) << " %";
   if (!estimate.components.empty()) {
     line << " (";
     for (std::size_t i = 0; i < estimate.components.size(); ++i) {

@@ -34,6 +34,7 @@ struct Component {
   std::string check;          ///< an independent discretisation it was checked against (checked_against); empty: none
   double check_delta = 0.0;   ///< (Q_check - value) / |value|
   double levels_delta = 0.0;  ///< delta before the check (the levels' own estimate)
+  double bound_ratio = 0.0;   ///< window_tail: the slowest decay's ratio per window (0: none given)
 };
 
 /// Three levels of a refinement with constant ratio r (coarse Q1, Q2, fine Q3 = the value that was
@@ -83,19 +84,40 @@ Component one_refinement(const std::string& name, double value, double refined, 
 /// A component given directly as a relative residue (the steady-state window change).
 Component residue(const std::string& name, double value, double relative);
 
-/// The components of one quantity, added up.
+/// The start transient left in the last analysis window (value) of a harmonic run, from the two
+/// windows before it (before, previous; NaN where the run had fewer): the transient decays by a
+/// constant ratio per window, so the changes between windows fall geometrically and what is left is
+/// Fs (Q3 - Q2)/(r - 1) (eq. 2 with r^p the ratio of successive changes). A linear damped transient
+/// cannot decay faster than its slowest mode, `slowest_ratio` = exp(sigma_min T_window) per window
+/// (sigma_min the least modal decay rate of the damping); a faster observed ratio comes from content
+/// of an earlier window that is not the tail (the start ramp) and would understate what is left
+/// (docs/benchmarks.md 11.11: a 45x ratio against 12.4 allowed, the estimate 0.35 of the error), so
+/// the ratio used is the smaller of the two, and the component then says it is not asymptotic.
+/// Non-monotone windows (beats) or two windows only: the larger of three times the last change and
+/// Fs/(slowest_ratio - 1) times it, not asymptotic. slowest_ratio <= 1 (no damping): not verified;
+/// NaN: no bound known (the observed ratio alone).
+Component window_tail(const std::string& name, double before, double previous, double value, double slowest_ratio);
+
+/// The components of one quantity, combined.
 struct Estimate {
   std::string quantity;  ///< "A2/A1", "f_b", ...
   double value = 0.0;
   std::vector<Component> components;
-  double sum = 0.0;  ///< sum of |delta| (conservative)
-  double rss = 0.0;  ///< root-sum-square of delta
+  /// The estimate reported (combine): the signed sum of the components' corrections delta/Fs whose
+  /// sign is trusted (Fs below kCautiousSafetyFactor), in modulus, plus each one's margin (Fs - 1)
+  /// |delta/Fs|, plus |delta| of every cautious component. It equals `sum` when the components
+  /// share a sign and is smaller where they cancel in the true error.
+  double error = 0.0;
+  double sum = 0.0;         ///< sum of |delta| (the conservative bound)
+  double signed_sum = 0.0;  ///< sum of delta
+  double rss = 0.0;         ///< root-sum-square of delta
   bool asymptotic = true;
   bool verified = true;
   std::vector<std::string> reasons;  ///< why not verified (the components that are not)
 };
 
-/// Sum and root-sum-square of the components; verified and asymptotic only when every component is.
+/// The estimate (Estimate::error), sum, signed sum and root-sum-square of the components; verified and
+/// asymptotic only when every component is.
 Estimate combine(const std::string& quantity, double value, std::vector<Component> components);
 
 /// One line: `A2/A1 = 0.1547 ± 0.6 % (mesh 0.5, modes 0.2, steps 0.1, penalty 0.1)`, with

@@ -85,24 +85,12 @@ accuracy::Estimate estimate_of(const std::string& quantity, RefinementRuns& runs
       components.push_back(accuracy::one_refinement("penalty", value, signature(runs.get(n.penalty), probe, q), 4.0, 1.0));
     }
     // The start transient decays geometrically from window to window: the last three windows give
-    // its rate and what is left of it (Richardson over windows); two windows only: their change.
-    const double previous = run.probes[probe].previous_window[q], before = run.probes[probe].window_before[q];
-    accuracy::Component window;
-    if (std::isfinite(before)) {
-      window = accuracy::three_level("window", before, previous, value, kOrderLevelRatio, kRateMin, kRateMax);
-    } else {
-      window = accuracy::one_refinement("window", value, std::isfinite(previous) ? 2.0 * value - previous : value, 1.0, 0.0);
-      window.asymptotic = false;
-      window.reason = "fewer than three analysis windows (the change from the window before, three times)";
-    }
-    // A decay that is not geometric over the last windows (beats) is bounded by three times the last
-    // change (Fs = 3), not a failed refinement: counted as verified, marked not asymptotic.
-    if (!window.verified) {
-      window.verified = true;
-      window.reason = "the start transient's decay is not geometric over the last three windows (" + window.reason +
-                      "): three times the last change";
-    }
-    components.push_back(window);
+    // its rate and what is left of it (Richardson over windows), the rate never faster than the
+    // damping's slowest decay; two windows only: their change.
+    const ProbeSignature& windows = run.probes[probe];
+    const double slowest_ratio = std::exp(run.slowest_decay_per_s * windows.window_s);
+    components.push_back(accuracy::window_tail("window", windows.window_before[q], windows.previous_window[q], value,
+                                               slowest_ratio));
   }
   return accuracy::combine(quantity, value, components);
 }
@@ -239,8 +227,9 @@ void run_with_accuracy(const scene::Scene& scene, const RunRoute& route, const s
   accuracy["method"] = "one refinement per component from the setting run (DETECTION.md sec. 1): mesh: the two lower "
                        "element orders (Richardson with the observed rate per order, GCI safety factor 1.25, 3 where "
                        "not asymptotic); modes: twice the band; steps: twice per period; penalty: four times; window: "
-                       "the change from the window before. delta: signed relative error of the value, error: sum of "
-                       "|delta|, rss: root-sum-square";
+                       "the start transient left in the last window, from the last three windows (Richardson over windows, "
+                       "the decay ratio never faster than the damping's slowest, decay_ratio_bound). delta: signed relative "
+                       "error of the value, error: the estimate, |sum of delta/Fs| over the components whose sign is trusted (Fs < 3) plus their margins (Fs - 1) |delta/Fs| plus |delta| of the others (equal to sum where the components share a sign), sum: sum of |delta| (the conservative bound), signed: sum of delta, rss: root-sum-square";
   accuracy["reached"] = setting_json(setting);
   if (!options.accuracy_start.empty() && plan.tolerance) accuracy["started_from"] = options.accuracy_start.string();
   accuracy["probes"] = estimate.probes;

@@ -217,7 +217,7 @@ Setting tolerance_start(const Setting& own, const fs::path& start_file, const Es
 }
 
 void add_to_summary(const accuracy::Estimate& estimate, SettingSummary& summary) {
-  summary.worst = std::max(summary.worst, estimate.sum);
+  summary.worst = std::max(summary.worst, estimate.error);
   summary.verified = summary.verified && estimate.verified;
   for (const accuracy::Component& component : estimate.components) {
     double& largest = summary.largest[component.name];
@@ -359,6 +359,7 @@ nlohmann::json component_json(const accuracy::Component& component) {
     json["levels_ratio"] = component.ratio;
     json["observed_rate"] = component.observed_order;
   }
+  if (component.bound_ratio != 0.0) json["decay_ratio_bound"] = component.bound_ratio;
   if (!component.reason.empty()) json["reason"] = component.reason;
   if (!component.check.empty()) json["check"] = {{"level", component.check},
                      {"delta", component.check_delta},
@@ -369,7 +370,8 @@ nlohmann::json component_json(const accuracy::Component& component) {
 nlohmann::json estimate_json(const accuracy::Estimate& estimate) {
   nlohmann::json components = nlohmann::json::object();
   for (const accuracy::Component& component : estimate.components) components[component.name] = component_json(component);
-  return {{"value", estimate.value},   {"error", estimate.sum},         {"rss", estimate.rss},
+  return {{"value", estimate.value},   {"error", estimate.error},  {"sum", estimate.sum},
+          {"signed", estimate.signed_sum}, {"rss", estimate.rss},
           {"verified", estimate.verified}, {"asymptotic", estimate.asymptotic}, {"reasons", estimate.reasons},
           {"components", components}};
 }

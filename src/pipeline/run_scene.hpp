@@ -2,6 +2,7 @@
 /// \file One run of a scene's stages (modal -> transient -> spectrum) and what it computed, for
 /// `crackle run` and for the refinement runs of its accuracy estimate (pipeline/accuracy.hpp).
 #include <array>
+#include <limits>
 #include <iosfwd>
 #include <map>
 #include <memory>
@@ -26,6 +27,7 @@ struct ProbeSignature {
   std::array<double, 4> value{};
   std::array<double, 4> previous_window{};
   std::array<double, 4> window_before{};
+  double window_s = 0.0;  ///< the length of each analysis window [s]
 };
 
 /// The uncracked, open and bilinear frequencies [Hz] of the mode the excitation refers to.
@@ -46,6 +48,9 @@ struct RunOutcome {
   double max_frequency_hz = 0.0;              ///< reduced model's band
   int modes = 0;                              ///< reduced model's retained modes
   int pairs = 0;
+  /// The least modal decay rate of the damping, alpha/2 + beta omega_1^2/2 [1/s] over the reduced
+  /// model's modes (MODEL.md eq. 26): its start transient decays no faster; NaN where not known.
+  double slowest_decay_per_s = std::numeric_limits<double>::quiet_NaN();
   double wall_s = 0.0;
 };
 

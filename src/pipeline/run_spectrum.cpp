@@ -103,6 +103,7 @@ nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::file
     signature.value = signature_values(table);
     signature.previous_window.fill(std::numeric_limits<double>::quiet_NaN());
     signature.window_before.fill(std::numeric_limits<double>::quiet_NaN());
+    signature.window_s = used / frequency;
     if (periods >= 2 * used) {
       signature.previous_window = signature_values(accumulator.table(periods - 2 * used, used));
     }

@@ -368,8 +368,8 @@ Param build_parameters() {
              {"auto", "on", "off"})
           .defaults_to("auto"),
       number("tolerance", "Relative error to reach on accuracy.quantities at every probe: the run refines the "
-                          "component with the largest error per unit cost until the estimate (sum of the "
-                          "components) is below it or accuracy.budget is spent (the mesh: one order up, at order 4 "
+                          "component with the largest error per unit cost until the estimate (the "
+                          "components combined with their signs and margins) is below it or accuracy.budget is spent (the mesh: one order up, at order 4 "
                           "one more front layer, up to 3; the window: the steady-state tolerance / 10 and "
                           "transient.periods x 4, twice at most); auto: 0.01 with transient.model: auto, else none "
                           "(the estimate only).").above(0).below(1).or_word("auto").defaults_to("auto"),
