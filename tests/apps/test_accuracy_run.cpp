@@ -109,6 +109,49 @@ TEST(DefaultRoute, TheBeamAsWrittenGivesItsConvergedSignatureWithAnEstimateThatH
   EXPECT_LE(fb_effectivity, 3.0) << "estimate " << fb["error"] << ", true error " << fb_true_error;
 }
 
+// A 2 mm crack at x = 0.11 m settles after 12 periods, so its first analysis window holds the start
+// ramp and the windows' changes fall 45x, faster than the damping lets the transient decay (12.4x per
+// window): taken as it stood, the window component was 0.35 of the window's true error, hidden by the
+// mesh part of the other sign (docs/benchmarks.md 11.11). The window's true error is measured here
+// (the same setting run to the steady state 1e-5, the modes from the first run's cache); the whole
+// estimate is checked against the same crack on a grid refined in every direction: graded [40, 4, 2]
+// cells at order 4 with 5 front layers, the band doubled and the steady state to 1e-5 (198 s, 19 GB,
+// computed once).
+constexpr double kFineReferenceA2Crack2mmAt011 = 0.016716781727411225;
+
+TEST(DefaultRoute, AWindowHoldingTheStartRampIsBoundedByTheDampingAndTheEstimateHoldsAgainstAFinerGrid) {
+  const std::string scene = std::string(CRACKLE_SOURCE_DIR) + "/data/beam.yaml";
+  const std::string crack = " --set crack.plane.at=0.11 --set crack.region.z=[0.008,0.01] --set spectrum.plots=false";
+  const std::string cache = " --modal-cache " + (scratch() / "crack-2mm-cache").string();
+  const cli_testing::Result route =
+      cli_testing::crackle("run " + scene + " -o " + (scratch() / "crack-2mm").string() + " -q" + crack + cache);
+  ASSERT_EQ(route.exit_code, 0) << route.output;
+  const cli_testing::Result settled = cli_testing::crackle(
+      "run " + scene + " -o " + (scratch() / "crack-2mm-settled").string() + " -q" + crack + cache +
+      " --set spectrum.steady_state.tolerance=1e-5 --set transient.periods=400 --set accuracy.estimate=off");
+  ASSERT_EQ(settled.exit_code, 0) << settled.output;
+  const nlohmann::json spectrum = read_json(scratch() / "crack-2mm" / "spectrum.json");
+  EXPECT_EQ(read_json(scratch() / "crack-2mm" / "run.json")["route"]["mesh"]["order"], 4);
+  const nlohmann::json& estimate = spectrum["accuracy"]["probes"]["tip"]["A2/A1"];
+  const double value = estimate["value"].get<double>();
+  ASSERT_TRUE(estimate["verified"].get<bool>()) << estimate.dump(2);
+
+  const nlohmann::json& window = estimate["components"]["window"];
+  EXPECT_GT(window["levels_ratio"].get<double>(), window["decay_ratio_bound"].get<double>()) << window.dump();
+  EXPECT_FALSE(window["asymptotic"].get<bool>());
+  const double steady = read_json(scratch() / "crack-2mm-settled" / "spectrum.json")["probes"]["tip"]["indices"]["A2/A1"];
+  const double window_error = (steady - value) / value;
+  const double window_effectivity = window["delta"].get<double>() / window_error;  // signed: the same sign
+  EXPECT_GE(window_effectivity, 1.0) << "window " << window["delta"] << ", its true error " << window_error;
+  EXPECT_LE(window_effectivity, 3.0) << "window " << window["delta"] << ", its true error " << window_error;
+
+  const double true_error = std::abs(value - kFineReferenceA2Crack2mmAt011) / kFineReferenceA2Crack2mmAt011;
+  EXPECT_LT(true_error, 0.01);
+  const double effectivity = estimate["error"].get<double>() / true_error;
+  EXPECT_GE(effectivity, 1.0) << "estimate " << estimate["error"] << ", true error " << true_error;
+  EXPECT_LE(effectivity, 3.0) << "estimate " << estimate["error"] << ", true error " << true_error;
+}
+
 // Where the reduced model's validity conditions do not hold, auto takes the full model and says why;
 // the full model's signature is then not estimated, and spectrum.json says that too.
 TEST(DefaultRoute, TakesTheFullModelWithItsReasonWhereTheReducedOneDoesNotServe) {
