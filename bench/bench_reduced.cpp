@@ -28,7 +28,7 @@
 #include "fem/system.hpp"
 #include "mesh/box.hpp"
 #include "reduced/integrator.hpp"
-#include "reduced/reduction.hpp"
+#include "reduction/reduction.hpp"
 
 namespace {
 

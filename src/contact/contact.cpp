@@ -5,7 +5,7 @@
 #include <limits>
 #include <string>
 
-#include "contact/penalty.hpp"
+#include "contact_law/penalty.hpp"
 #include "core/errors.hpp"
 
 namespace crackle::contact {

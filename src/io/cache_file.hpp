@@ -1,6 +1,6 @@
 #pragma once
 /// \file One binary file cache for every solver that keeps results between runs (the modes of
-/// modal/cache.hpp, the reduced models of reduced/reduction.hpp): a record `<prefix>-<key>.bin` in a
+/// modal/cache.hpp, the reduced models of reduction/reduction.hpp): a record `<prefix>-<key>.bin` in a
 /// folder, the key a 64-bit fingerprint (core/fingerprint.hpp) in 16 hex digits, opening with an
 /// 8-byte magic (the format and its version) and the key, then what the owner puts: raw values,
 /// dense matrices (int64 rows, cols, then the doubles column by column) and texts (int64 length, then

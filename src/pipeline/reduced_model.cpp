@@ -6,7 +6,7 @@
 #include "contact/contact.hpp"
 #include "core/errors.hpp"
 #include "core/resources.hpp"
-#include "reduced/reduction.hpp"
+#include "reduction/reduction.hpp"
 #include "transient/damping.hpp"
 #include "transient/excitation.hpp"
 

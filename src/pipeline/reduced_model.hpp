@@ -1,5 +1,5 @@
 #pragma once
-/// \file The scene's reduced model (HYBRID.md §2): the pipeline-level builder over reduced/reduction.hpp,
+/// \file The scene's reduced model (HYBRID.md §2): the pipeline-level builder over reduction/reduction.hpp,
 /// shared by the reduced transient of `crackle run` and by `crackle sweep`. The expensive part (modes,
 /// static solves) is cached by fingerprint in the --modal-cache folder, so a study over excitation
 /// frequency, amplitude or damping computes it once.
@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "pipeline/model.hpp"
-#include "reduced/reduction.hpp"
+#include "reduction/reduction.hpp"
 #include "reduced/system.hpp"
 #include "scene/scene.hpp"
 #include "transient/excitation.hpp"

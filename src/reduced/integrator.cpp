@@ -7,7 +7,7 @@
 #include <string>
 #include <utility>
 
-#include "contact/penalty.hpp"
+#include "contact_law/penalty.hpp"
 #include "core/errors.hpp"
 
 namespace crackle::reduced {

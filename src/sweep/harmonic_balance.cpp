@@ -11,7 +11,7 @@
 #include <complex>
 #include <string>
 
-#include "contact/penalty.hpp"
+#include "contact_law/penalty.hpp"
 #include "core/errors.hpp"
 
 namespace crackle::sweep {

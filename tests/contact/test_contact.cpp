@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "contact/contact.hpp"
-#include "contact/penalty.hpp"
+#include "contact_law/penalty.hpp"
 #include "core/errors.hpp"
 #include "fem/material.hpp"
 #include "mesh/box.hpp"

@@ -4,7 +4,7 @@
 /// x in [0.1, 0.2] ((n/2)(n + 1) split pairs), reduced with a unit z load on the free end's top edge
 /// (compiled once in crackle_test_support).
 #include "contact/contact.hpp"
-#include "reduced/reduction.hpp"
+#include "reduction/reduction.hpp"
 
 namespace crackle::reduced::testing {
 

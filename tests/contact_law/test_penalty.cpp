@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "contact/penalty.hpp"
+#include "contact_law/penalty.hpp"
 
 namespace crackle::contact {
 namespace {

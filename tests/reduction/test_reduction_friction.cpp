@@ -10,14 +10,14 @@
 #include <string>
 
 #include "contact/contact.hpp"
-#include "contact/penalty.hpp"
+#include "contact_law/penalty.hpp"
 #include "core/errors.hpp"
 #include "fem/material.hpp"
 #include "fem/system.hpp"
 #include "mesh/box.hpp"
 #include "delaminated_plate.hpp"
 #include "reduced/integrator.hpp"
-#include "reduced/reduction.hpp"
+#include "reduction/reduction.hpp"
 
 namespace crackle::reduced {
 namespace {

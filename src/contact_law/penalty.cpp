@@ -1,4 +1,4 @@
-#include "contact/penalty.hpp"
+#include "contact_law/penalty.hpp"
 
 #include <cmath>
 

@@ -19,7 +19,7 @@
 #include "mesh/box.hpp"
 #include "delaminated_plate.hpp"
 #include "reduced/integrator.hpp"
-#include "reduced/reduction.hpp"
+#include "reduction/reduction.hpp"
 
 namespace crackle::reduced {
 namespace {

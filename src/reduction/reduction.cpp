@@ -1,4 +1,4 @@
-#include "reduced/reduction.hpp"
+#include "reduction/reduction.hpp"
 
 #include <algorithm>
 #include <cmath>
