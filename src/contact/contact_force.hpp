@@ -1,7 +1,6 @@
 #pragma once
 /// \file The crack-face contact as a force term of the semi-discrete system (fem::ForceTerm): the
 /// time integrator plugs it in from outside and never names contact (STYLE.md).
-#include <nlohmann/json_fwd.hpp>
 
 #include "contact/contact.hpp"
 #include "fem/force_term.hpp"
@@ -58,9 +57,5 @@ class ContactForce final : public fem::ForceTerm {
   PenaltyContact contact_;
 };
 
-/// transient.json's contact fields (public names): penalty, penalty_tangential, penalty_auto,
-/// penalty_factor / penalty_modulus / penalty_element_size (automatic only), friction,
-/// contact_integration.
-nlohmann::json contact_json(const PenaltyContact& contact);
 
 }  // namespace crackle::contact

@@ -12,7 +12,6 @@
 #include <functional>
 #include <vector>
 
-#include <nlohmann/json_fwd.hpp>
 
 #include "core/defaults.hpp"
 #include "core/types.hpp"
@@ -188,24 +187,9 @@ std::vector<ModePair> pair_modes(const VectorX& f_uncracked, const VectorX& f_op
 /// constrained DOFs; duplicated crack nodes of the uncracked variant take their original's value.
 std::vector<double> nodal_shape(const mesh::Mesh& mesh, const VariantResult& variant, int mode);
 
-/// The modal.json document: {"dofs", "variants": {name: {"frequencies_hz", ...}}, "pairs",
-/// "solver", "timings_s", ...}.
-nlohmann::json modal_json(const ModalResult& result);
-
 /// Terminal table: mode, f_uncracked, f_open, ratio, MAC, f_bilinear (or the frequencies of the
 /// single variant solved).
 std::string modal_table(const ModalResult& result);
-
-/// Writes DIR/modal.json, DIR/modes.csv and DIR/modes_<variant>.vtu (all modes as point data).
-/// `accuracy` (given): modal.json's `accuracy` block, whose estimates at `pairs[i].<field>` or
-/// `variants.<name>.frequencies_hz[i]` give modes.csv its "<column> error [-]" columns.
-/// Collective-free: call it on one rank (see is_output_rank()).
-void write_modal_outputs(const std::filesystem::path& directory, const mesh::Mesh& mesh,
-                         const ModalResult& result, const nlohmann::json* accuracy = nullptr);
-
-/// modal.json and modes.csv alone, as write_modal_outputs writes them (the mode shapes unchanged).
-void write_modal_tables(const std::filesystem::path& directory, const ModalResult& result,
-                        const nlohmann::json* accuracy = nullptr);
 
 /// True on the rank that writes files (rank 0, or any process without MPI).
 inline bool is_output_rank() { return mpi_rank() == 0; }

@@ -23,6 +23,7 @@
 #include "pipeline/output_folder.hpp"
 #include "modal/modal.hpp"
 #include "scene/scene.hpp"
+#include "output/modal_json.hpp"
 
 namespace crackle::pipeline {
 
@@ -95,7 +96,7 @@ void run_modal_command(const ModalCommandOptions& options, std::ostream& out, co
       return std::make_tuple(std::move(model), std::move(result), seconds_since(start));
     };
     auto [model, result, run_s] = solve(scene);
-    if (writer) modal::write_modal_outputs(options.output_directory, model->mesh, result);
+    if (writer) output::write_modal_outputs(options.output_directory, model->mesh, result);
 
     // The estimate: the plan's other orders, solved one after the other (DETECTION.md sec. 1).
     const ModalLevelPlan plan = modal_level_plan(scene, launched_ranks());
@@ -147,7 +148,7 @@ void run_modal_command(const ModalCommandOptions& options, std::ostream& out, co
       lines = accuracy.lines;
     }
     if (!writer) return;
-    modal::write_modal_tables(options.output_directory, result, &block);
+    output::write_modal_tables(options.output_directory, result, &block);
     folder->finish("done");
     out << modal::modal_table(result);
     for (const std::string& line : lines) out << line << "\n";

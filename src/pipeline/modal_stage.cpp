@@ -10,6 +10,7 @@
 #include "pipeline/reduced_model.hpp"
 #include "pipeline/route.hpp"
 #include "pipeline/stages.hpp"
+#include "output/modal_json.hpp"
 
 namespace crackle::pipeline {
 
@@ -103,7 +104,7 @@ std::optional<modal::ModalResult> run_modal_stage(const scene::Scene& scene, con
   }
   modal::ModalResult modes = modal::run_modal(
       [&model](mesh::Variant variant) -> const fem::System& { return *model.system(variant); }, modal_settings);
-  on_writer_rank([&] { modal::write_modal_outputs(output_directory, model.mesh, modes); });
+  on_writer_rank([&] { output::write_modal_outputs(output_directory, model.mesh, modes); });
   stage.ran = true;
   stage.seconds = clock.seconds();
   out << modal::modal_table(modes);

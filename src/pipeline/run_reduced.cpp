@@ -13,6 +13,9 @@
 #include "pipeline/reduced_model.hpp"
 #include "pipeline/run_stages.hpp"
 #include "reduced/integrator.hpp"
+#include "output/energy_csv.hpp"
+#include "output/probes_csv.hpp"
+#include "output/transient_json.hpp"
 
 namespace crackle::pipeline {
 namespace {
@@ -80,7 +83,7 @@ void reduced_energy_row(const reduced::ReducedIntegrator& integrator, double ini
 /// transient.json of the reduced model: the full model's common fields and the reduction's.
 nlohmann::json reduced_transient_json(const ReducedModel& reduced, const reduced::ReducedIntegrator& integrator,
                                       int steps_per_period, const transient::TransientSummary& summary) {
-  nlohmann::json json = transient::transient_json(summary);
+  nlohmann::json json = output::transient_json(summary);
   json["model"] = "reduced";
   json["modes"] = reduced.modes;
   json["pairs"] = reduced.pairs;
@@ -221,8 +224,8 @@ transient::ProbeHistory run_reduced_stage(const scene::Scene& scene, const Model
   summary.steps = integrator.n_steps_taken();
   summary.energy_error = integrator.energy_error();
   const std::filesystem::path& directory = options.output_directory;
-  transient::write_probe_csv(directory / "probes.csv", records.probes);
-  transient::write_energy_csv(directory / "energy.csv", records.energy);
+  output::write_probe_csv(directory / "probes.csv", records.probes);
+  output::write_energy_csv(directory / "energy.csv", records.energy);
   nlohmann::json json = reduced_transient_json(reduced, integrator, steps_per_period, summary);
   json["probes"] = setup.probes_json;
   json["probe_interval"] = records.probe_interval;

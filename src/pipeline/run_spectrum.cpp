@@ -13,6 +13,7 @@
 #include "spectral/ringdown.hpp"
 #include "spectral/signature.hpp"
 #include "spectral/spectrum.hpp"
+#include "output/spectrum_json.hpp"
 
 namespace crackle::pipeline {
 namespace {
@@ -97,7 +98,7 @@ nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::file
     const ProbeSpectrum& probe = probes_[p];
     const spectral::HarmonicAccumulator& accumulator = monitor_.accumulator(p);
     const spectral::HarmonicTable table = accumulator.last_table(used);
-    probes_json[probe.name] = spectral::probe_json(probe.label, table);
+    probes_json[probe.name] = output::probe_json(probe.label, table);
     ProbeSignature signature;
     signature.name = probe.name;
     signature.value = signature_values(table);
@@ -132,7 +133,7 @@ nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::file
     out << "\n";
   }
   spectrum_json["probes"] = probes_json;
-  spectrum_json["steady_state"] = spectral::steady_state_json(state);
+  spectrum_json["steady_state"] = output::steady_state_json(state);
   spectrum_json["steady_state"]["window_periods"] = used;
   return spectrum_json;
 }
@@ -242,7 +243,7 @@ void write_ringdown_spectrum(const scene::Scene& scene, const std::filesystem::p
     const std::vector<double>& values = history.values[9 * p + component];
     nlohmann::json probe_json = {{"component", analysed_label(probe, component)}};
     const spectral::RingdownAnalysis analysis = spectral::analyse_ringdown(values, sampling, options);
-    nlohmann::json ringdown = spectral::ringdown_json(analysis);
+    nlohmann::json ringdown = output::ringdown_json(analysis);
     if (modes) {
       const nlohmann::json comparison = modal_comparison(*modes, setup, analysis.natural_frequency_hz);
       if (!comparison.is_null()) ringdown["modal_comparison"] = comparison;

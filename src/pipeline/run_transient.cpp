@@ -9,6 +9,7 @@
 #include "io/vtu.hpp"
 #include "pipeline/limits.hpp"
 #include "pipeline/run_stages.hpp"
+#include "output/transient_json.hpp"
 
 namespace crackle::pipeline {
 
@@ -80,7 +81,7 @@ std::unique_ptr<transient::TransientSolver> run_transient_stage(const scene::Sce
   }
   const transient::TransientSolver& finished = *solver;
   callbacks.on_finish = [&](const transient::TransientSummary& summary) {
-    nlohmann::json extra = setup.contact ? contact::contact_json(setup.contact->contact()) : nlohmann::json::object();
+    nlohmann::json extra = setup.contact ? output::contact_json(setup.contact->contact()) : nlohmann::json::object();
     extra["probes"] = setup.probes_json;
     extra["probe_interval"] = finished_interval;
     if (setup.distributed) extra["partition"] = setup.distributed->partition_json;
@@ -88,7 +89,7 @@ std::unique_ptr<transient::TransientSolver> run_transient_stage(const scene::Sce
     warnings.insert(warnings.end(), summary.warnings.begin(), summary.warnings.end());
     extra["warnings"] = warnings;
     // Every rank holds the same records (summed each step): rank 0 writes them.
-    on_writer_rank([&] { transient::write_transient_outputs(directory, finished, extra); });
+    on_writer_rank([&] { output::write_transient_outputs(directory, finished, extra); });
   };
   solver->run(callbacks);
   return solver;

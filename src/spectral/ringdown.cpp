@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
-#include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
 #include "core/types.hpp"
@@ -18,17 +17,6 @@ constexpr int kMinPeriods = 4;
 constexpr int kMinSamplesPerPeriod = 4;  ///< of the highest order
 constexpr int kStencil = 8;              ///< Lagrange interpolation points
 
-
-nlohmann::json order_json(double order) {
-  if (order == std::floor(order) && std::abs(order) < 1e9) {
-    return nlohmann::json(static_cast<int>(order));
-  }
-  return nlohmann::json(order);
-}
-
-nlohmann::json number_or_null(double value) {
-  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
-}
 
 void check_time_step(const char* who, double dt) {
   if (!(dt > 0.0) || !std::isfinite(dt)) {
@@ -357,44 +345,6 @@ RingdownAnalysis analyse_ringdown(const std::vector<double>& samples, const Samp
     analysis.harmonics.push_back(h);
   }
   return analysis;
-}
-
-nlohmann::json ringdown_json(const RingdownAnalysis& analysis) {
-  nlohmann::json harmonics = nlohmann::json::array();
-  nlohmann::json orders = nlohmann::json::array();
-  for (const RingdownHarmonic& h : analysis.harmonics) {
-    harmonics.push_back({{"order", order_json(h.order)},
-                         {"frequency_hz", h.frequency_hz},
-                         {"amplitude", h.amplitude},
-                         {"relative_amplitude", number_or_null(h.relative_amplitude)},
-                         {"phase_rad", h.phase_rad}});
-    orders.push_back(order_json(h.order));
-  }
-  nlohmann::json starts = nlohmann::json::array();
-  nlohmann::json ends = nlohmann::json::array();
-  nlohmann::json amplitudes = nlohmann::json::array();
-  for (const EnvelopeWindow& w : analysis.envelope) {
-    starts.push_back(w.start_time);
-    ends.push_back(w.end_time);
-    amplitudes.push_back(w.amplitude);
-  }
-  return {{"frequency_hz", analysis.frequency_hz},
-          {"natural_frequency_hz", analysis.natural_frequency_hz},
-          {"decay_rate_per_s", analysis.decay_rate_per_s},
-          {"logarithmic_decrement", analysis.logarithmic_decrement},
-          {"damping_ratio", analysis.damping_ratio},
-          {"decay_fit_residual", analysis.decay_fit_residual},
-          {"mean", analysis.mean},
-          {"start_time_s", analysis.start_time},
-          {"end_time_s", analysis.end_time},
-          {"periods", analysis.periods},
-          {"harmonics", harmonics},
-          {"envelope",
-           {{"window_periods", analysis.window_periods},
-            {"orders", orders},
-            {"start_time_s", starts},
-            {"end_time_s", ends},
-            {"amplitude", amplitudes}}}};
 }
 
 FrequencyResponse estimate_frf(const std::vector<double>& response,

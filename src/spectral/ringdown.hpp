@@ -9,7 +9,6 @@
 /// k = 1/2, 3/2, ..., H - 1/2 of the ring-down frequency f.
 #include <complex>
 #include <limits>
-#include <nlohmann/json_fwd.hpp>
 #include <vector>
 
 #include "spectral/harmonics.hpp"
@@ -96,12 +95,6 @@ struct RingdownAnalysis {
 RingdownAnalysis analyse_ringdown(const std::vector<double>& samples, const Sampling& sampling,
                                   const RingdownOptions& options);
 
-/// `{"frequency_hz", "natural_frequency_hz", "decay_rate_per_s", "logarithmic_decrement",
-/// "damping_ratio", "decay_fit_residual", "mean", "start_time_s", "end_time_s", "periods",
-/// "harmonics": [{"order", "frequency_hz", "amplitude", "relative_amplitude", "phase_rad"}],
-/// "envelope": {"window_periods", "orders", "start_time_s": [..], "end_time_s": [..],
-/// "amplitude": [[A_k per order] per window]}}`; whole orders are written as integers.
-nlohmann::json ringdown_json(const RingdownAnalysis& analysis);
 
 /// Frequency-response estimate H(f) = X(f) / F(f) from one impact record.
 struct FrequencyResponse {

@@ -1,7 +1,5 @@
 #pragma once
-/// \file Damage indices and the JSON of harmonic signatures (a public contract: the key names
-/// below are read by scripts and reports; change them only with a format version bump).
-#include <nlohmann/json_fwd.hpp>
+/// \file Damage indices of harmonic signatures (their JSON: output/spectrum_json.hpp).
 #include <string>
 
 #include "spectral/harmonics.hpp"
@@ -19,19 +17,5 @@ struct DamageIndices {
 
 /// Indices of a table.
 DamageIndices damage_indices(const HarmonicTable& table);
-
-/// `[{"order": 0, "frequency_hz": .., "amplitude": .., "phase_rad": ..}, {"order": 0.5, ...},
-/// {"order": 1, ...}, ...]`, ascending order; whole orders are written as integers. Conventions
-/// of harmonics.hpp: peak amplitudes, cosine phases at absolute time, order 0 the signed mean.
-nlohmann::json harmonics_json(const HarmonicTable& table);
-
-/// `{"A2/A1": .., "A3/A1": .., "A1/2/A1": .., "beta": ..}`, null where not defined.
-nlohmann::json indices_json(const DamageIndices& indices);
-
-/// The per-probe structure `{"component": "z", "harmonics": [...], "indices": {...}}`.
-nlohmann::json probe_json(const std::string& component, const HarmonicTable& table);
-
-/// `{"settled": .., "periods_used": .., "change": ..}` (change null while undefined).
-nlohmann::json steady_state_json(const SteadyState& state);
 
 }  // namespace crackle::spectral

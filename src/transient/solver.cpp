@@ -6,13 +6,10 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
-#include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
 #include "core/interrupt.hpp"
 #include "core/resources.hpp"
-#include "io/csv.hpp"
-#include "io/files.hpp"
 #include "transient/force_terms.hpp"
 #include "transient/integrator.hpp"
 
@@ -762,87 +759,6 @@ const TransientSummary& TransientSolver::run(const TransientCallbacks& callbacks
   }
   if (callbacks.on_finish) callbacks.on_finish(impl.summary);
   return impl.summary;
-}
-
-void write_probe_csv(const std::filesystem::path& path, const ProbeHistory& probes) {
-  io::CsvTable table;
-  table.add("time [s]", probes.time);
-  static const char* quantities[3] = {"u", "v", "a"};
-  static const char* units[3] = {"m", "m/s", "m/s^2"};
-  static const char* opening_names[3] = {"gap", "slip_1", "slip_2"};
-  static const char* opening_suffixes[3] = {"", "_rate", "_acceleration"};
-  for (std::size_t p = 0; p < probes.names.size(); ++p) {
-    const bool opening = p < probes.opening.size() && probes.opening[p];
-    for (int q = 0; q < 3; ++q) {
-      for (int c = 0; c < 3; ++c) {
-        const std::string quantity = opening ? std::string(opening_names[c]) + opening_suffixes[q]
-                                             : std::string(quantities[q]) + "_" + axis_name(c);
-        table.add(probes.names[p] + " " + quantity + " [" + units[q] + "]", probes.values[9 * p + 3 * q + c]);
-      }
-    }
-    if (opening) table.add(probes.names[p] + " state [0 open 1 stick 2 slip]", probes.states[p]);
-  }
-  io::write_csv(path, table);
-}
-
-void write_energy_csv(const std::filesystem::path& path, const EnergyHistory& energy) {
-  io::CsvTable table;
-  table.add("time [s]", energy.time);
-  table.add("kinetic [J]", energy.kinetic);
-  table.add("strain [J]", energy.strain);
-  table.add("contact [J]", energy.contact);
-  table.add("external_work [J]", energy.external_work);
-  table.add("damping [J]", energy.damping);
-  table.add("friction [J]", energy.friction);
-  table.add("balance [J]", energy.balance);
-  table.add("relative_error [-]", energy.relative_error);
-  io::write_csv(path, table);
-}
-
-nlohmann::json transient_json(const TransientSummary& summary) {
-  nlohmann::json json;
-  json["status"] = summary.status;
-  json["message"] = summary.message;
-  json["steps"] = summary.steps;
-  json["time"] = summary.time;
-  json["dt"] = summary.dt;
-  json["dt_critical"] = summary.dt_critical;
-  json["omega_max"] = summary.omega_max;
-  json["time_step_forced"] = summary.time_step_forced;
-  json["penalty"] = nullptr;  // a contact term plugged in replaces it with its own fields
-  json["damping"] = {{"alpha", summary.damping.alpha}, {"beta", summary.damping.beta}};
-  json["energy_error"] = summary.energy_error;
-  json["contact_fraction"] = summary.contact_fraction;
-  const auto contact_seconds = summary.term_seconds.find("contact");
-  json["contact_time_fraction"] = summary.wall_s > 0.0 && contact_seconds != summary.term_seconds.end()
-                                      ? contact_seconds->second / summary.wall_s
-                                      : 0.0;
-  json["wall_s"] = summary.wall_s;
-  json["setup_s"] = summary.setup_s;
-  json["ns_per_dof_step"] = summary.ns_per_dof_step;
-  json["dofs"] = summary.n_dofs;
-  json["elements"] = summary.n_elements;
-  json["threads"] = summary.n_threads;
-  json["ranks"] = summary.ranks;
-  json["elements_per_rank"] = {{"min", summary.elements_min}, {"max", summary.elements_max}};
-  json["halo_overlapped"] = summary.halo_overlapped;
-  json["kernel"] = summary.kernel;
-  json["warnings"] = summary.warnings;
-  return json;
-}
-
-void write_transient_outputs(const std::filesystem::path& directory, const TransientSolver& solver,
-                             const nlohmann::json& extra) {
-  io::ensure_directory(directory);
-  write_probe_csv(directory / "probes.csv", solver.probes());
-  write_energy_csv(directory / "energy.csv", solver.energy());
-  nlohmann::json json = transient_json(solver.summary());
-  json.update(extra);
-  io::write_json(directory / "transient.json", json);
-}
-
-void write_transient_outputs(const std::filesystem::path& directory, const TransientSolver& solver) {
-  write_transient_outputs(directory, solver, nlohmann::json::object());
 }
 
 }  // namespace crackle::transient

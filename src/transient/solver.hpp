@@ -24,7 +24,6 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json_fwd.hpp>
 
 #include "fem/force_term.hpp"
 #include "fem/system.hpp"
@@ -217,21 +216,5 @@ class TransientSolver {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
-
-/// probes.csv: "time [s]", then per probe "<name> u_x [m]" ... "<name> a_z [m/s^2]"; an opening probe
-/// "<name> gap [m]", "<name> slip_1 [m]", "<name> slip_2 [m]", "<name> gap_rate [m/s]" ...,
-/// "<name> gap_acceleration [m/s^2]" ..., "<name> state [0 open 1 stick 2 slip]".
-void write_probe_csv(const std::filesystem::path& path, const ProbeHistory& probes);
-/// energy.csv: time and the EnergyHistory columns with units.
-void write_energy_csv(const std::filesystem::path& path, const EnergyHistory& energy);
-/// The summary as transient.json's fields (public names: steps, dt, dt_critical, energy_error,
-/// contact_fraction, wall_s, and more; the contact's own fields are added by whoever plugged it in).
-nlohmann::json transient_json(const TransientSummary& summary);
-/// probes.csv, energy.csv and transient.json (the summary merged with `extra`) into a directory
-/// (created if needed).
-void write_transient_outputs(const std::filesystem::path& directory, const TransientSolver& solver,
-                             const nlohmann::json& extra);
-/// The same without extra fields.
-void write_transient_outputs(const std::filesystem::path& directory, const TransientSolver& solver);
 
 }  // namespace crackle::transient

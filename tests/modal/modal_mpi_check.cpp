@@ -14,6 +14,7 @@
 #include "core/errors.hpp"
 #include "modal/modal.hpp"
 #include "modal_meshes.hpp"
+#include "output/modal_json.hpp"
 
 using namespace crackle;
 
@@ -25,7 +26,7 @@ nlohmann::json analyse() {
   options.modes = 8;
   const modal::ModalResult result =
       modal::run_modal(mesh, modal::testing::steel(0.3), {modal::testing::fix(mesh, "x-", {0, 1, 2})}, options);
-  nlohmann::json document = modal::modal_json(result);
+  nlohmann::json document = output::modal_json(result);
   std::printf("rank %d of %d: %s, %d free DOFs, f1 = %.15g Hz (uncracked), %.15g Hz (open)\n", modal::mpi_rank(),
               modal::mpi_size(), document["solver"]["factorization"].get<std::string>().c_str(),
               document["dofs"].get<int>(), result.variants[0].modes.frequencies_hz[0],

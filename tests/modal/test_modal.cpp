@@ -15,6 +15,7 @@
 #include "core/errors.hpp"
 #include "modal/modal.hpp"
 #include "modal_meshes.hpp"
+#include "output/modal_json.hpp"
 
 namespace crackle::modal {
 namespace {
@@ -395,7 +396,7 @@ TEST(ModalOutput, WritesJsonCsvVtuAndTable) {
   const std::filesystem::path directory =
       std::filesystem::path(CRACKLE_BINARY_DIR) / "tests" / "modal" / "output_test";
   std::filesystem::remove_all(directory);
-  write_modal_outputs(directory, mesh, result);
+  output::write_modal_outputs(directory, mesh, result);
 
   std::ifstream json_file(directory / "modal.json");
   const nlohmann::json document = nlohmann::json::parse(json_file);

@@ -10,6 +10,7 @@
 #include "spectral/harmonics.hpp"
 #include "spectral/signature.hpp"
 #include "spectral/spectrum.hpp"
+#include "output/spectrum_json.hpp"
 
 namespace crackle::spectral {
 namespace {
@@ -26,7 +27,7 @@ TEST(OrderZero, IsTheSignedMeanInTheTableTheJsonAndTheSpectrum) {
   harmonic_options.max_order = 2;
   const HarmonicTable table = extract_harmonics(x, sampling, harmonic_options);
   EXPECT_NEAR(table.amplitude(0.0), mean, 1e-18);
-  const nlohmann::json json = harmonics_json(table);
+  const nlohmann::json json = output::harmonics_json(table);
   ASSERT_EQ(json[0]["order"], 0);
   EXPECT_NEAR(json[0]["amplitude"].get<double>(), mean, 1e-18);
 

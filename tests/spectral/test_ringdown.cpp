@@ -9,6 +9,7 @@
 #include "core/errors.hpp"
 #include "spectral/ringdown.hpp"
 #include "synthetic.hpp"
+#include "output/spectrum_json.hpp"
 
 using namespace crackle;
 using namespace crackle::spectral;
@@ -254,7 +255,7 @@ TEST(Ringdown, Json) {
   const Sampling sampling{1.0 / (100.37 * mode.damped_frequency), 0.0};
   const RingdownAnalysis analysis =
       analyse_ringdown(sample(mode, sampling, 6000), sampling, RingdownOptions{});
-  const nlohmann::json json = ringdown_json(analysis);
+  const nlohmann::json json = output::ringdown_json(analysis);
   EXPECT_EQ(json.at("frequency_hz").get<double>(), analysis.frequency_hz);
   EXPECT_EQ(json.at("damping_ratio").get<double>(), analysis.damping_ratio);
   EXPECT_EQ(json.at("periods").get<int>(), analysis.periods);

@@ -10,6 +10,7 @@
 #include "spectral/signature.hpp"
 #include "spectral/spectrum.hpp"
 #include "synthetic.hpp"
+#include "output/spectrum_json.hpp"
 
 using namespace crackle;
 using namespace crackle::spectral;
@@ -55,7 +56,7 @@ TEST(Signature, DamageIndicesAreAmplitudeRatios) {
 }
 
 TEST(Signature, ProbeJsonHasThePublicKeyNames) {
-  const nlohmann::json probe = probe_json("z", rich_table(true));
+  const nlohmann::json probe = output::probe_json("z", rich_table(true));
   EXPECT_EQ(probe["component"], "z");
   const auto& harmonics = probe["harmonics"];
   ASSERT_EQ(harmonics.size(), 7u);
@@ -75,18 +76,18 @@ TEST(Signature, ProbeJsonHasThePublicKeyNames) {
   EXPECT_NEAR(indices["beta"].get<double>(), 0.1, 1e-10);
   EXPECT_EQ(probe.size(), 3u);
   // Without sub-harmonics the index is null, and the JSON still parses back.
-  const nlohmann::json plain = probe_json("x", rich_table(false));
+  const nlohmann::json plain = output::probe_json("x", rich_table(false));
   EXPECT_TRUE(plain["indices"]["A1/2/A1"].is_null());
   EXPECT_EQ(nlohmann::json::parse(plain.dump()), plain);
 }
 
 TEST(Signature, SteadyStateJson) {
   SteadyState state;
-  EXPECT_TRUE(steady_state_json(state)["change"].is_null());
+  EXPECT_TRUE(output::steady_state_json(state)["change"].is_null());
   state.settled = true;
   state.periods_used = 42;
   state.change = 1e-7;
-  const nlohmann::json json = steady_state_json(state);
+  const nlohmann::json json = output::steady_state_json(state);
   EXPECT_EQ(json["settled"], true);
   EXPECT_EQ(json["periods_used"], 42);
   EXPECT_EQ(json["change"], 1e-7);

@@ -11,6 +11,7 @@
 #include "transient/damping.hpp"
 #include "transient/solver.hpp"
 #include "transient_testing.hpp"
+#include "output/transient_json.hpp"
 
 namespace crackle::transient {
 namespace {
@@ -132,7 +133,7 @@ TEST(Outputs, CallbackStopsEarlyAndFilesCarryThePublicNames) {
   };
   callbacks.on_finish = [&](const TransientSummary&) {
     finished = true;
-    write_transient_outputs(directory, solver, contact::contact_json(contact_term->contact()));  // as the run pipeline does
+    output::write_transient_outputs(directory, solver, output::contact_json(contact_term->contact()));  // as the run pipeline does
   };
   const TransientSummary& summary = solver.run(callbacks);
   EXPECT_TRUE(finished);

@@ -12,6 +12,7 @@
 #include "mesh/box.hpp"
 #include "transient/solver.hpp"
 #include "transient_testing.hpp"
+#include "output/transient_json.hpp"
 
 namespace crackle::transient {
 namespace {
@@ -137,7 +138,7 @@ TEST(TimeStep, BelowTheLimitStaysBoundedAboveItIsRefusedOrCaught) {
   TransientCallbacks callbacks;
   callbacks.on_finish = [&](const TransientSummary& summary) {
     finished = summary.status == "unstable";
-    write_transient_outputs(directory, forced);  // as the run pipeline does
+    output::write_transient_outputs(directory, forced);  // as the run pipeline does
   };
   EXPECT_THROW(forced.run(callbacks), SolverError);
   EXPECT_TRUE(finished);

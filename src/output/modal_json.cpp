@@ -1,25 +1,28 @@
-/// \file Modal outputs: modal.json, modes.csv, mode-shape VTU files and the terminal table.
+#include "output/modal_json.hpp"
+
 #include <cstdio>
 #include <limits>
 #include <string>
 #include <vector>
+
 #include <nlohmann/json.hpp>
 
 #include "io/csv.hpp"
 #include "io/files.hpp"
 #include "io/vtu.hpp"
-#include "modal/modal.hpp"
 
-namespace crackle::modal {
+namespace crackle::output {
 namespace {
 
-std::vector<double> to_std(const VectorX& values) { return {values.data(), values.data() + values.size()}; }
+using modal::ModalResult;
+using modal::ModePair;
+using modal::VariantResult;
+using modal::ModeSet;
+using modal::MacWeighting;
+using modal::SolveReport;
+using modal::Solver;
 
-std::string format(const char* pattern, double value) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, pattern, value);
-  return buffer;
-}
+std::vector<double> to_std(const VectorX& values) { return {values.data(), values.data() + values.size()}; }
 
 }  // namespace
 
@@ -105,47 +108,6 @@ nlohmann::json modal_json(const ModalResult& result) {
   return document;
 }
 
-std::string modal_table(const ModalResult& result) {
-  std::string text;
-  int unpaired = 0;
-  if (!result.pairs.empty()) {
-    text += " mode  f_uncracked [Hz]      f_open [Hz]  open#    ratio      MAC  f_bilinear [Hz]\n";
-    for (const ModePair& pair : result.pairs) {
-      char line[200];
-      std::snprintf(line, sizeof line, "%5d %17.6g %16.6g %6d %8.5f %8.4f %16.6g%s\n", pair.uncracked_mode + 1,
-                    pair.f_uncracked_hz, pair.f_open_hz, pair.open_mode + 1, pair.ratio, pair.mac,
-                    pair.f_bilinear_hz, pair.paired ? "" : "  unpaired");
-      text += line;
-      unpaired += !pair.paired;
-    }
-    if (unpaired > 0) {
-      text += "(unpaired: MAC below " + format("%.1f", kPairingMac) +
-              ", the open partner is not among the modes computed; raise modal.modes)\n";
-    }
-  } else {
-    text += " mode";
-    for (const VariantResult& variant : result.variants) {
-      char header[64];
-      std::snprintf(header, sizeof header, " %20s", (std::string("f_") + mesh::variant_name(variant.variant) + " [Hz]").c_str());
-      text += header;
-    }
-    text += "\n";
-    const int modes = result.variants.empty() ? 0 : result.variants.front().modes.n_modes();
-    for (int mode = 0; mode < modes; ++mode) {
-      text += format("%5.0f", mode + 1);
-      for (const VariantResult& variant : result.variants) text += format(" %20.6g", variant.modes.frequencies_hz[mode]);
-      text += "\n";
-    }
-  }
-  for (const VariantResult& variant : result.variants) {
-    if (variant.modes.n_rigid() > 0) {
-      text += std::string("(") + mesh::variant_name(variant.variant) + ": " +
-              std::to_string(variant.modes.n_rigid()) + " rigid-body modes not listed)\n";
-    }
-  }
-  return text;
-}
-
 void write_modal_tables(const std::filesystem::path& directory, const ModalResult& result,
                         const nlohmann::json* accuracy_block) {
   io::ensure_directory(directory);
@@ -223,11 +185,11 @@ void write_modal_outputs(const std::filesystem::path& directory, const mesh::Mes
     for (int mode = 0; mode < variant.modes.n_modes(); ++mode) {
       char name[32];
       std::snprintf(name, sizeof name, "mode_%02d", mode + 1);
-      fields.push_back({name, 3, nodal_shape(mesh, variant, mode)});
+      fields.push_back({name, 3, modal::nodal_shape(mesh, variant, mode)});
     }
     io::write_vtu(directory / (std::string("modes_") + mesh::variant_name(variant.variant) + ".vtu"), mesh,
                   fields);
   }
 }
 
-}  // namespace crackle::modal
+}  // namespace crackle::output
