@@ -267,7 +267,10 @@ std::string estimate_line(const Estimate& estimate) {
     line << " (";
     for (std::size_t i = 0; i < estimate.components.size(); ++i) {
       const Component& component = estimate.components[i];
-      line << (i ? ", " : "") << component.name << " " << number(100.0 * std::abs(component.delta), 2);
+      // Signed (the error of the value: + where the refined value is larger), so that a reader sees
+      // where the components cancel and why the estimate is below the sum of their moduli.
+      const double percent = 100.0 * component.delta;
+      line << (i ? ", " : "") << component.name << " " << (percent > 0.0 ? "+" : "") << number(percent, 2);
     }
     line << ")";
   }

@@ -120,7 +120,8 @@ struct Estimate {
 /// asymptotic only when every component is.
 Estimate combine(const std::string& quantity, double value, std::vector<Component> components);
 
-/// One line: `A2/A1 = 0.1547 ± 0.6 % (mesh 0.5, modes 0.2, steps 0.1, penalty 0.1)`, with
+/// One line: `A2/A1 = 0.1547 ± 0.6 % (mesh +0.5, modes -0.2, steps +0.1, penalty +0.1)` (each
+/// component's signed delta in %), with
 /// `not verified: reason` appended when it is not.
 std::string estimate_line(const Estimate& estimate);
 

@@ -198,7 +198,8 @@ TEST(Combine, TheEstimateAddsTheTrustedCorrectionsWithTheirSignsAndTheirMargins)
   EXPECT_LE(estimate.error, 3.0 * truth);
   EXPECT_NEAR(estimate.sum, kSafetyFactor * 0.035, 1e-15);
   EXPECT_NEAR(estimate.signed_sum, kSafetyFactor * truth, 1e-15);
-  EXPECT_NE(estimate_line(estimate).find("± 1.4 %"), std::string::npos) << estimate_line(estimate);
+  EXPECT_NE(estimate_line(estimate).find("± 1.4 % (steps +2.5, penalty -1.9)"), std::string::npos)
+      << estimate_line(estimate);
 
   const Component same_sign = one_refinement("penalty", value, value - 0.75 * penalty_error, 4.0, 1.0);
   EXPECT_NEAR(combine("A2/A1", value, {steps, same_sign}).error, kSafetyFactor * 0.035, 1e-15);
