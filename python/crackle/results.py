@@ -135,6 +135,40 @@ class Result:
                     self.documents[name] = json.load(file)
         self.json = self.documents.get(self.main_document, {})
 
+    @property
+    def estimates(self):
+        """Every error estimate the command wrote, one row each (a list of dicts:
+        ``pandas.DataFrame(result.estimates)`` is a table): ``at`` the estimate's place in its
+        document's ``accuracy`` block (``probes/tip/A2/A1``, ``mode/f_bilinear``,
+        ``pairs/0/f_open_hz``, ``probes/tip/peak_a2_over_a1/value``), ``value``, ``error`` (the
+        estimate, relative), ``sum`` (the sum of the components' moduli, the conservative bound),
+        ``signed``, ``rss``, ``verified``, ``asymptotic`` and ``delta <component>`` (each component's
+        signed relative error). Empty where nothing was estimated."""
+        rows = []
+
+        def walk(node, path):
+            if isinstance(node, dict):
+                if "error" in node and isinstance(node.get("components"), dict):
+                    row = {"at": "/".join(path)}
+                    for key in ("value", "error", "sum", "signed", "rss", "verified", "asymptotic"):
+                        row[key] = node.get(key)
+                    for name, component in node["components"].items():
+                        row["delta " + name] = component.get("delta") if isinstance(component, dict) else None
+                    rows.append(row)
+                    return
+                for key, child in node.items():
+                    walk(child, path + [str(key)])
+            elif isinstance(node, list):
+                for index, child in enumerate(node):
+                    walk(child, path + [str(index)])
+
+        for name in self._estimate_documents:
+            document = self.documents.get(name) or {}
+            walk(document.get("accuracy") or {}, [])
+        return rows
+
+    _estimate_documents = ()
+
     def write(self, directory):
         """Writes the command's files into ``directory`` (created if needed), as ``crackle ... -o
         directory`` writes them: where a text file names the output folder (run.json ``output``,
@@ -191,6 +225,7 @@ class ModalResult(Result):
     open); ``mesh`` the modal mesh the shapes live on."""
 
     main_document = "modal.json"
+    _estimate_documents = ("modal.json",)
 
     def __init__(self, folder, log, arrays):
         super().__init__(folder, log)
@@ -236,6 +271,7 @@ class RunResult(Result):
     modal.json (None when it did not run); ``json`` is run.json."""
 
     main_document = "run.json"
+    _estimate_documents = ("spectrum.json",)  # run.json holds the summary only
 
     def __init__(self, folder, log):
         super().__init__(folder, log)
@@ -257,6 +293,7 @@ class SweepResult(Result):
     ``u_z``); ``json`` is sweep.json."""
 
     main_document = "sweep.json"
+    _estimate_documents = ("sweep.json",)
 
     def __init__(self, folder, log):
         super().__init__(folder, log)

@@ -83,6 +83,24 @@ def test_a_run_starts_its_tolerance_where_an_earlier_result_ended():
         crackle.sweep(toleranced, quiet=True, accuracy_start=crackle.sweep(small_beam(), quiet=True))
 
 
+def test_the_estimates_load_as_one_table():
+    """RunResult.estimates: one row per estimated signature and frequency of spectrum.json's accuracy
+    block, with the estimate, its bound and each component; here at order 2, where the mesh part is
+    not estimated, so every row says verified False."""
+    scene = small_beam()
+    scene.set("accuracy.estimate", "on")
+    run = crackle.run(scene, quiet=True)
+    rows = {row["at"]: row for row in run.estimates}
+    assert "probes/tip/A2/A1" in rows and "probes/tip/A1" in rows, sorted(rows)
+    block = run.spectrum["accuracy"]["probes"]["tip"]["A2/A1"]
+    row = rows["probes/tip/A2/A1"]
+    assert row["value"] == block["value"] and row["error"] == block["error"]
+    assert row["delta window"] == block["components"]["window"]["delta"]
+    for row in rows.values():
+        assert row["error"] <= row["sum"] * (1 + 1e-12) and row["verified"] is False
+    assert crackle.run(small_beam(), quiet=True).estimates == []  # accuracy.estimate off
+
+
 def test_two_runs_in_one_process_are_identical():
     scene = small_beam()
     first, second = crackle.sweep(scene, quiet=True), crackle.sweep(scene, quiet=True)
