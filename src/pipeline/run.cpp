@@ -122,17 +122,7 @@ RunOutcome run_scene(const scene::Scene& scene, const RunCommandOptions& options
 
 void write_run_json(const scene::Scene& scene, const fs::path& directory, const RunOutcome& outcome,
                     const nlohmann::json& route, const nlohmann::json& accuracy, double wall_s) {
-  nlohmann::json run_json = {{"scene", scene.file}, {"output", directory.string()}};
-  nlohmann::json stage_list = nlohmann::json::array();
-  for (const Stage& stage : outcome.stages) {
-    stage_list.push_back({{"name", stage.name}, {"ran", stage.ran}, {"reason", stage.reason}, {"seconds", stage.seconds}});
-  }
-  run_json["stages"] = stage_list;
-  run_json["excitation_hz"] = outcome.frequency;
-  if (!route.is_null()) run_json["route"] = route;
-  if (!accuracy.is_null()) run_json["accuracy"] = accuracy;
-  run_json["wall_s"] = wall_s;
-  io::write_json(directory / "run.json", run_json);
+  output::write_run_json(directory, scene.file, outcome.stages, outcome.frequency, route, accuracy, wall_s);
 }
 
 

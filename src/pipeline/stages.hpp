@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "modal/modal.hpp"
+#include "output/run_json.hpp"
 #include "pipeline/model.hpp"
 #include "scene/scene.hpp"
 #include "transient/damping.hpp"
@@ -15,12 +16,7 @@
 namespace crackle::pipeline {
 
 /// One line of run.json / sweep.json: a stage, whether it ran, why, and its time.
-struct Stage {
-  std::string name;
-  bool ran = false;
-  std::string reason;
-  double seconds = 0.0;
-};
+using Stage = output::Stage;
 
 /// Frequency [Hz] of elastic mode `mode` (1-based) of the given kind (bilinear, uncracked, open)
 /// from a modal result. InputError naming `key` when that mode was not computed or not paired.

@@ -131,9 +131,8 @@ SweepOutcome sweep_scene(const scene::Scene& scene, const SweepCommandOptions& o
   if (!stability_note.empty()) result.warnings.insert(result.warnings.begin(), stability_note);
 
   nlohmann::json document = sweep_json(result, settings);
-  nlohmann::json stages = nlohmann::json::array();
-  for (const Stage& stage : {modal_stage, reduction_stage, Stage{"sweep", true, settings.section.method, result.solve_s}})
-    stages.push_back({{"name", stage.name}, {"ran", stage.ran}, {"reason", stage.reason}, {"seconds", stage.seconds}});
+  const nlohmann::json stages =
+      output::stages_json({modal_stage, reduction_stage, Stage{"sweep", true, settings.section.method, result.solve_s}});
   const Index unknowns = reduced.system.n_rows() * (2 * settings.section.harmonics + 1);
   if (!stability_note.empty()) document["stability_note"] = stability_note;
   document["scene"] = scene.file;
