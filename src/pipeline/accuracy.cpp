@@ -229,7 +229,7 @@ void run_with_accuracy(const scene::Scene& scene, const RunRoute& route, const s
                        "not asymptotic); modes: twice the band; steps: twice per period; penalty: four times; window: "
                        "the start transient left in the last window, from the last three windows (Richardson over windows, "
                        "the decay ratio never faster than the damping's slowest, decay_ratio_bound). delta: signed relative "
-                       "error of the value, error: the estimate, |sum of delta/Fs| over the components whose sign is trusted (Fs < 3) plus their margins (Fs - 1) |delta/Fs| plus |delta| of the others (equal to sum where the components share a sign), sum: sum of |delta| (the conservative bound), signed: sum of delta, rss: root-sum-square";
+                       "error of the value, " + std::string(kEstimateFields);
   accuracy["reached"] = setting_json(setting);
   if (!options.accuracy_start.empty() && plan.tolerance) accuracy["started_from"] = options.accuracy_start.string();
   accuracy["probes"] = estimate.probes;

@@ -23,6 +23,13 @@ namespace crackle::pipeline {
 /// Rate of the mesh levels (accuracy::kOrderLevelRatio: the order raised by one per level).
 inline constexpr double kOrderLevelRatio = accuracy::kOrderLevelRatio;
 inline constexpr double kRateMin = accuracy::kOrderRateMin, kRateMax = accuracy::kOrderRateMax;
+
+/// What an estimate's fields mean (spectrum.json's and sweep.json's `accuracy.method` end with it).
+inline constexpr const char* kEstimateFields =
+    "error: the estimate, |sum of delta/Fs| over the components whose sign is trusted (Fs < 3) plus their "
+    "margins (Fs - 1) |delta/Fs| plus |delta| of the others (equal to sum where the components share a sign), "
+    "sum: sum of |delta| (the conservative bound), signed: sum of delta, rss: root-sum-square";
+
 /// The highest element order (the box mesher's); beyond it the mesh is refined by front layers.
 inline constexpr int kHighestOrder = 4;
 /// The most front layers the mesh refinement adds to the scene's at the highest order.

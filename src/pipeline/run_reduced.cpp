@@ -179,10 +179,7 @@ transient::ProbeHistory run_reduced_stage(const scene::Scene& scene, const Model
   outcome.max_frequency_hz = reduced.max_frequency_hz;
   outcome.modes = reduced.modes;
   outcome.pairs = static_cast<int>(reduced.pairs);
-  if (reduced.system.n_modes() > 0) {  // omega ascending: the lowest mode (rigid: omega 0) decays slowest
-    const double omega = reduced.system.omega[0];
-    outcome.slowest_decay_per_s = 0.5 * (reduced.system.rayleigh_alpha + reduced.system.rayleigh_beta * omega * omega);
-  }
+  if (reduced.system.n_modes() > 0) outcome.slowest_decay_per_s = reduced.system.slowest_decay_rate();
   const transient::Signal signal = setup.problem.loads.empty() ? transient::Signal{} : setup.problem.loads[0].signal;
   const bool loaded = !setup.problem.loads.empty();
   const reduced::ReducedIntegrator::LoadFunction load = [signal, loaded](double t) {

@@ -230,8 +230,8 @@ void sweep_with_accuracy(const scene::Scene& scene, const RunRoute& route, const
       "of the range; where the branch has no fold or period doubling and every peak stays inside its window), else "
       "the whole range at half the points. Estimated: each probe's peaks (value and frequency, the parabola through the "
       "three points around the largest, or the value at a range end), the fold and period-doubling frequencies (by "
-      "kind and order along the branch) and the bilinear frequency. delta: signed relative error of the value, "
-      "error: the estimate, |sum of delta/Fs| over the components whose sign is trusted (Fs < 3) plus their margins (Fs - 1) |delta/Fs| plus |delta| of the others (equal to sum where the components share a sign), sum: sum of |delta| (the conservative bound), signed: sum of delta, rss: root-sum-square";
+      "kind and order along the branch) and the bilinear frequency. delta: signed relative error of the value, " +
+      std::string(kEstimateFields);
   accuracy["reached"] = setting_json(setting);
   if (!options.accuracy_start.empty() && plan.tolerance) accuracy["started_from"] = options.accuracy_start.string();
   accuracy.update(estimate.json);  // probes, bilinear_hz, events: each number's estimate at its own place

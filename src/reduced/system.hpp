@@ -50,6 +50,13 @@ struct ReducedSystem {
   Index rows_per_pair() const { return friction ? 3 : 1; }
   Index n_rows() const { return rows_per_pair() * n_pairs(); }
   Index n_outputs() const { return static_cast<Index>(output_modes.rows()); }
+  /// The least modal decay rate of the damping, alpha/2 + beta omega_0^2/2 [1/s] at the lowest mode
+  /// (omega ascending; a rigid mode decays at alpha/2): the system's start transient decays no
+  /// faster. 0 without modes.
+  double slowest_decay_rate() const {
+    if (n_modes() == 0) return 0.0;
+    return 0.5 * (rayleigh_alpha + rayleigh_beta * omega[0] * omega[0]);
+  }
   /// Modal damping ratio zeta_r of the Rayleigh damping (exact per mode); rigid modes (omega 0)
   /// get alpha-only damping handled by the integrators (zeta undefined): returns 0 there.
   double damping_ratio(Index mode) const {
