@@ -88,4 +88,61 @@ nlohmann::json ringdown_json(const spectral::RingdownAnalysis& analysis) {
             {"amplitude", amplitudes}}}};
 }
 
+nlohmann::json spectrum_json(double excitation_hz, const std::vector<ProbeTable>& probes,
+                             const spectral::SteadyState& state, int window_periods) {
+  nlohmann::json probes_json = nlohmann::json::object();
+  for (const ProbeTable& probe : probes) probes_json[probe.name] = probe_json(probe.component, probe.table);
+  nlohmann::json document = {
+      {"excitation_hz", excitation_hz},
+      {"amplitude_convention",
+       "peak amplitude A_k of x(t) = A_0 + sum A_k cos(2 pi k f t + phi_k), t from the start of the run"},
+      {"probes", probes_json},
+      {"steady_state", steady_state_json(state)}};
+  document["steady_state"]["window_periods"] = window_periods;
+  return document;
+}
+
+namespace {
+
+nlohmann::json comparison_json(const ModalComparison& comparison) {
+  nlohmann::json json = {{"reference", comparison.reference},
+                         {"mode", comparison.mode},
+                         {"reference_hz", comparison.reference_hz},
+                         {"relative_difference", comparison.relative_difference}};
+  if (comparison.f_uncracked_hz) json["f_uncracked_hz"] = *comparison.f_uncracked_hz;
+  if (comparison.f_open_hz) json["f_open_hz"] = *comparison.f_open_hz;
+  if (comparison.f_bilinear_hz) json["f_bilinear_hz"] = *comparison.f_bilinear_hz;
+  return json;
+}
+
+}  // namespace
+
+nlohmann::json ringdown_spectrum_json(const std::string& excitation, const std::vector<RingdownProbe>& probes,
+                                      const std::string& release) {
+  nlohmann::json probes_json = nlohmann::json::object();
+  for (const RingdownProbe& probe : probes) {
+    nlohmann::json entry = {{"component", probe.component}};
+    nlohmann::json ringdown = ringdown_json(probe.analysis);
+    if (probe.comparison) ringdown["modal_comparison"] = comparison_json(*probe.comparison);
+    entry["ringdown"] = ringdown;
+    if (probe.frf) {
+      entry["frf"] = {{"file", probe.frf->file},
+                      {"unit", "m/N"},
+                      {"force_direction", probe.frf->force_direction},
+                      {"resolution_hz", probe.frf->resolution_hz},
+                      {"f_max_hz", probe.frf->f_max_hz},
+                      {"peaks_hz", probe.frf->peaks_hz}};
+    }
+    probes_json[probe.name] = entry;
+  }
+  nlohmann::json document = {
+      {"excitation_hz", 0.0},
+      {"excitation", excitation},
+      {"amplitude_convention", "ringdown: peak amplitudes A_k of the orders k f of the dominant frequency f, "
+                               "the fitted decay removed (amplitudes at the analysis start time)"},
+      {"probes", probes_json}};
+  if (!release.empty()) document["release"] = release;
+  return document;
+}
+
 }  // namespace crackle::output

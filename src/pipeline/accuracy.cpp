@@ -118,7 +118,7 @@ SettingEstimate estimate_setting(RefinementRuns& runs, const Setting& setting, c
     for (int q = 0; q < 4; ++q) {
       const std::string quantity = ProbeSignature::kNames[q];
       const accuracy::Estimate estimate = estimate_of(quantity, runs, setting, static_cast<int>(p), q);
-      probe_json[quantity] = estimate_json(estimate);
+      probe_json[quantity] = output::estimate_json(estimate);
       take(estimate, counts(quantity));
       if (q < 3) result.lines.push_back({run.probes[p].name, estimate});
     }
@@ -129,7 +129,7 @@ SettingEstimate estimate_setting(RefinementRuns& runs, const Setting& setting, c
     static const char* names[3] = {"f_uncracked", "f_open", "f_bilinear"};
     for (int q = 0; q < 3; ++q) {
       const accuracy::Estimate estimate = estimate_of(names[q], runs, setting, -1, q);
-      result.mode[names[q]] = estimate_json(estimate);
+      result.mode[names[q]] = output::estimate_json(estimate);
       if (q == 2) {
         take(estimate, counts("f_b"));
         result.lines.push_back({"mode " + std::to_string(run.mode->mode), estimate});
@@ -150,12 +150,12 @@ std::optional<Setting> refine(RefinementRuns& runs, const Setting& setting, cons
     const double growth = here / std::max(1e-3, runs.get(*n.coarse).wall_s);
     choices.push_back(mesh_choice(setting, runs.scene(), here * growth));
   }
-  choices.push_back({"modes", n.band, runs.get(n.band).wall_s});
-  choices.push_back({"steps", n.steps, runs.get(n.steps).wall_s});
-  if (runs.has_contact()) choices.push_back({"penalty", n.penalty, runs.get(n.penalty).wall_s});
+  choices.push_back({"modes", n.band, runs.get(n.band).wall_s, ""});
+  choices.push_back({"steps", n.steps, runs.get(n.steps).wall_s, ""});
+  if (runs.has_contact()) choices.push_back({"penalty", n.penalty, runs.get(n.penalty).wall_s, ""});
   // A longer run on the same mesh: the model and modal stage are shared, so it costs about what the
   // twice-the-steps run did, times two for the longer steady state.
-  choices.push_back({"window", n.window, 2.0 * runs.get(n.steps).wall_s});
+  choices.push_back({"window", n.window, 2.0 * runs.get(n.steps).wall_s, ""});
   return choose_refinement(choices, summary, budget_left, "none (no component has an error left)", blocking, tolerance);
 }
 
@@ -229,7 +229,7 @@ void run_with_accuracy(const scene::Scene& scene, const RunRoute& route, const s
                        "not asymptotic); modes: twice the band; steps: twice per period; penalty: four times; window: "
                        "the start transient left in the last window, from the last three windows (Richardson over windows, "
                        "the decay ratio never faster than the damping's slowest, decay_ratio_bound). delta: signed relative "
-                       "error of the value, " + std::string(kEstimateFields);
+                       "error of the value, " + std::string(output::kEstimateFields);
   accuracy["reached"] = setting_json(setting);
   if (!options.accuracy_start.empty() && plan.tolerance) accuracy["started_from"] = options.accuracy_start.string();
   accuracy["probes"] = estimate.probes;

@@ -173,7 +173,7 @@ ModalAccuracy modal_accuracy(const ModalLevelPlan& plan, const std::vector<Modal
   for (const auto& [name, frequencies] : run->variants) {
     nlohmann::json list = nlohmann::json::array();
     for (std::size_t i = 0; i < frequencies.size(); ++i) {
-      list.push_back(estimate_json(estimate_of("f_" + name + " " + std::to_string(i + 1), [&](const ModalLevel& l) {
+      list.push_back(output::estimate_json(estimate_of("f_" + name + " " + std::to_string(i + 1), [&](const ModalLevel& l) {
         const auto found = l.variants.find(name);
         return found != l.variants.end() && i < found->second.size() ? found->second[i] : kNaN;
       })));
@@ -199,10 +199,10 @@ ModalAccuracy modal_accuracy(const ModalLevelPlan& plan, const std::vector<Modal
     const accuracy::Estimate f_o = estimate_of("f_open" + mode, field(&modal::ModePair::f_open_hz, true));
     const accuracy::Estimate f_b = estimate_of("f_bilinear" + mode, field(&modal::ModePair::f_bilinear_hz, true));
     const accuracy::Estimate ratio = estimate_of("ratio" + mode, field(&modal::ModePair::ratio, true));
-    pairs.push_back({{"f_uncracked_hz", estimate_json(f_u)},
-                     {"f_open_hz", estimate_json(f_o)},
-                     {"f_bilinear_hz", estimate_json(f_b)},
-                     {"ratio", estimate_json(ratio)}});
+    pairs.push_back({{"f_uncracked_hz", output::estimate_json(f_u)},
+                     {"f_open_hz", output::estimate_json(f_o)},
+                     {"f_bilinear_hz", output::estimate_json(f_b)},
+                     {"ratio", output::estimate_json(ratio)}});
     out.lines.push_back("accuracy mode" + mode + ": " + short_line({{"f_uncracked", &f_u}, {"f_open", &f_o},
                                                                     {"f_bilinear", &f_b}}));
   }

@@ -313,20 +313,8 @@ nlohmann::json accuracy_summary(const std::string& setting, std::optional<double
                                 const std::vector<std::string>& quantities, double budget_s,
                                 const SettingSummary& summary, const ToleranceOutcome& outcome,
                                 const nlohmann::json& runs, double run_s, double estimate_s, double wall_s) {
-  nlohmann::json json = {{"estimated", true},
-                         {"setting", setting},
-                         {"tolerance", tolerance ? nlohmann::json(*tolerance) : nlohmann::json(nullptr)},
-                         {"quantities", quantities},
-                         {"budget_s", budget_s},
-                         {"error", summary.worst},
-                         {"verified", summary.verified},
-                         {"runs", runs},
-                         {"run_s", run_s},
-                         {"estimate_s", estimate_s},
-                         {"share", wall_s > 0.0 ? estimate_s / wall_s : 0.0}};
-  if (outcome.met) json["met"] = *outcome.met;
-  if (!outcome.blocking.empty()) json["blocking"] = outcome.blocking;
-  return json;
+  return output::accuracy_json({setting, tolerance, quantities, budget_s, summary.worst, summary.verified, outcome.met,
+                                outcome.blocking, runs, run_s, estimate_s, wall_s});
 }
 
 void print_accuracy_end(std::ostream& out, std::optional<double> tolerance, const ToleranceOutcome& outcome,
@@ -347,33 +335,6 @@ std::string percent(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%.2g %%", 100.0 * value);
   return text;
-}
-
-nlohmann::json component_json(const accuracy::Component& component) {
-  nlohmann::json json = {{"delta", component.delta},
-                         {"refined", component.refined},
-                         {"safety_factor", component.safety_factor},
-                         {"verified", component.verified},
-                         {"asymptotic", component.asymptotic}};
-  if (component.ratio != 0.0) {
-    json["levels_ratio"] = component.ratio;
-    json["observed_rate"] = component.observed_order;
-  }
-  if (component.bound_ratio != 0.0) json["decay_ratio_bound"] = component.bound_ratio;
-  if (!component.reason.empty()) json["reason"] = component.reason;
-  if (!component.check.empty()) json["check"] = {{"level", component.check},
-                     {"delta", component.check_delta},
-                     {"levels_delta", component.levels_delta}};
-  return json;
-}
-
-nlohmann::json estimate_json(const accuracy::Estimate& estimate) {
-  nlohmann::json components = nlohmann::json::object();
-  for (const accuracy::Component& component : estimate.components) components[component.name] = component_json(component);
-  return {{"value", estimate.value},   {"error", estimate.error},  {"sum", estimate.sum},
-          {"signed", estimate.signed_sum}, {"rss", estimate.rss},
-          {"verified", estimate.verified}, {"asymptotic", estimate.asymptotic}, {"reasons", estimate.reasons},
-          {"components", components}};
 }
 
 }  // namespace crackle::pipeline

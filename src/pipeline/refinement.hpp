@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "accuracy/estimate.hpp"
+#include "output/accuracy_json.hpp"
 #include "scene/scene.hpp"
 
 namespace crackle::pipeline {
@@ -23,12 +24,6 @@ namespace crackle::pipeline {
 /// Rate of the mesh levels (accuracy::kOrderLevelRatio: the order raised by one per level).
 inline constexpr double kOrderLevelRatio = accuracy::kOrderLevelRatio;
 inline constexpr double kRateMin = accuracy::kOrderRateMin, kRateMax = accuracy::kOrderRateMax;
-
-/// What an estimate's fields mean (spectrum.json's and sweep.json's `accuracy.method` end with it).
-inline constexpr const char* kEstimateFields =
-    "error: the estimate, |sum of delta/Fs| over the components whose sign is trusted (Fs < 3) plus their "
-    "margins (Fs - 1) |delta/Fs| plus |delta| of the others (equal to sum where the components share a sign), "
-    "sum: sum of |delta| (the conservative bound), signed: sum of delta, rss: root-sum-square";
 
 /// The highest element order (the box mesher's); beyond it the mesh is refined by front layers.
 inline constexpr int kHighestOrder = 4;
@@ -191,11 +186,5 @@ void print_accuracy_end(std::ostream& out, std::optional<double> tolerance, cons
 
 /// A relative error as text: "0.23 %".
 std::string percent(double value);
-
-/// The JSON of one component and of one quantity's estimate (spectrum.json and sweep.json
-/// `accuracy`): delta, refined, safety factor, verified, asymptotic, levels ratio and rate, reason;
-/// value, error (sum), rss, verified, asymptotic, reasons and the components by name.
-nlohmann::json component_json(const accuracy::Component& component);
-nlohmann::json estimate_json(const accuracy::Estimate& estimate);
 
 }  // namespace crackle::pipeline

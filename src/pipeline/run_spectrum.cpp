@@ -77,8 +77,6 @@ SpectrumMonitor::SpectrumMonitor(const scene::Scene& scene, double frequency, do
 nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::filesystem::path& directory, double dt,
                                       std::vector<ProbeSignature>& signatures, std::ostream& out) {
   const double frequency = options_.excitation_frequency_hz;
-  nlohmann::json spectrum_json = {{"excitation_hz", frequency}, {"amplitude_convention",
-                                  "peak amplitude A_k of x(t) = A_0 + sum A_k cos(2 pi k f t + phi_k), t from the start of the run"}};
   // Close the record: grid points of the last period still waiting for stencil samples.
   for (std::size_t p = 0; p < probes_.size(); ++p) monitor_.accumulator(p).finish();
   const int periods = monitor_.accumulator(0).n_periods();
@@ -90,7 +88,7 @@ nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::file
   spectral::SteadyState state = monitor_.verdict().value_or(spectral::SteadyState{});
   state.periods_used = periods;
   state.limit_reached = !state.settled;
-  nlohmann::json probes_json = nlohmann::json::object();
+  std::vector<output::ProbeTable> tables;
   const spectral::Sampling sampling{dt, 0.0};  // every step, from t = 0
   spectral::SpectrumAnalyzer analyzer;
   plot::PlotOptions plot;
@@ -98,7 +96,7 @@ nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::file
     const ProbeSpectrum& probe = probes_[p];
     const spectral::HarmonicAccumulator& accumulator = monitor_.accumulator(p);
     const spectral::HarmonicTable table = accumulator.last_table(used);
-    probes_json[probe.name] = output::probe_json(probe.label, table);
+    tables.push_back({probe.name, probe.label, table});
     ProbeSignature signature;
     signature.name = probe.name;
     signature.value = signature_values(table);
@@ -132,18 +130,16 @@ nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::file
     if (options_.subharmonics) out << ", A1/2/A1 = " << indices.a_half_over_a1;
     out << "\n";
   }
-  spectrum_json["probes"] = probes_json;
-  spectrum_json["steady_state"] = output::steady_state_json(state);
-  spectrum_json["steady_state"]["window_periods"] = used;
-  return spectrum_json;
+  return output::spectrum_json(frequency, tables, state, used);
 }
 
 namespace {
 
 /// The modal frequency a ring-down is compared with: bilinear for a breathing crack (the open body
 /// with contact), else the run variant's own; the mode nearest the measured frequency.
-nlohmann::json modal_comparison(const modal::ModalResult& modes, const TransientSetup& setup, double frequency_hz) {
-  nlohmann::json comparison;
+std::optional<output::ModalComparison> modal_comparison(const modal::ModalResult& modes, const TransientSetup& setup,
+                                                        double frequency_hz) {
+  std::optional<output::ModalComparison> comparison;
   const bool breathing = setup.contact != nullptr;
   double best = std::numeric_limits<double>::infinity();
   if (breathing) {
@@ -151,13 +147,9 @@ nlohmann::json modal_comparison(const modal::ModalResult& modes, const Transient
       const modal::ModePair& pair = modes.pairs[i];
       if (!pair.paired || std::abs(pair.f_bilinear_hz - frequency_hz) >= best) continue;
       best = std::abs(pair.f_bilinear_hz - frequency_hz);
-      comparison = {{"reference", "bilinear"},
-                    {"mode", pair.uncracked_mode + 1},
-                    {"f_uncracked_hz", pair.f_uncracked_hz},
-                    {"f_open_hz", pair.f_open_hz},
-                    {"f_bilinear_hz", pair.f_bilinear_hz},
-                    {"reference_hz", pair.f_bilinear_hz},
-                    {"relative_difference", frequency_hz / pair.f_bilinear_hz - 1.0}};
+      comparison = output::ModalComparison{"bilinear", pair.uncracked_mode + 1, pair.f_bilinear_hz,
+                                           frequency_hz / pair.f_bilinear_hz - 1.0, pair.f_uncracked_hz,
+                                           pair.f_open_hz, pair.f_bilinear_hz};
     }
     return comparison;
   }
@@ -168,18 +160,17 @@ nlohmann::json modal_comparison(const modal::ModalResult& modes, const Transient
     const double f = variant->modes.frequencies_hz[i];
     if (std::abs(f - frequency_hz) >= best) continue;
     best = std::abs(f - frequency_hz);
-    comparison = {{"reference", name}, {"mode", i + 1}, {"reference_hz", f},
-                  {"relative_difference", frequency_hz / f - 1.0}};
+    comparison = output::ModalComparison{name, i + 1, f, frequency_hz / f - 1.0, {}, {}, {}};
   }
   return comparison;
 }
 
 /// After a pulse: the FRF estimate H = X/F of one probe over the band the pulse excites, written as
-/// frf_<probe>.csv; its peaks go into the probe's spectrum.json entry.
+/// frf_<probe>.csv; its summary (peaks) for the probe's spectrum.json entry in `summary`.
 spectral::FrequencyResponse write_frf(const std::filesystem::path& directory, const std::string& name, const std::vector<double>& values,
                                       const transient::ProbeHistory& history, const spectral::Sampling& sampling,
                                       const scene::ExcitationSection& excitation,
-                                      nlohmann::json& probe_json, std::ostream& out) {
+                                      output::FrfSummary& summary, std::ostream& out) {
   std::vector<double> force(history.time.size());
   for (std::size_t i = 0; i < force.size(); ++i) {
     force[i] = spectral::half_sine_pulse(history.time[i], 0.0, excitation.duration, excitation.amplitude);
@@ -200,12 +191,8 @@ spectral::FrequencyResponse write_frf(const std::filesystem::path& directory, co
   table.add("Im H [m/N]", imaginary);
   io::write_csv(directory / ("frf_" + name + ".csv"), table);
   const std::vector<double> peaks = spectral::frf_peaks(frf);
-  probe_json["frf"] = {{"file", "frf_" + name + ".csv"},
-                       {"unit", "m/N"},
-                       {"force_direction", axis_name(excitation.direction)},
-                       {"resolution_hz", frf.resolution_hz},
-                       {"f_max_hz", frf.frequency_hz.empty() ? 0.0 : frf.frequency_hz.back()},
-                       {"peaks_hz", peaks}};
+  summary = {"frf_" + name + ".csv", axis_name(excitation.direction), frf.resolution_hz,
+             frf.frequency_hz.empty() ? 0.0 : frf.frequency_hz.back(), peaks};
   out << "frf " << name << ": " << frf.frequency_hz.size() << " bins of " << std::setprecision(4)
       << frf.resolution_hz << " Hz, peaks at";
   for (double peak : peaks) out << " " << std::setprecision(6) << peak;
@@ -234,28 +221,22 @@ void write_ringdown_spectrum(const scene::Scene& scene, const std::filesystem::p
   options.subharmonics = spectrum.subharmonics;
   options.window_periods = spectrum.ringdown_window_periods + (spectrum.subharmonics && spectrum.ringdown_window_periods % 2);
   options.start_time = spectrum.ringdown_start.value_or(pulse ? excitation->duration : 0.0);
-  nlohmann::json probes_json = nlohmann::json::object();
+  std::vector<output::RingdownProbe> probes;
   plot::PlotOptions plot;
   for (std::size_t p = 0; p < section.probes.size(); ++p) {
     const scene::ProbeSection& probe = section.probes[p];
     const int component = analysed_component(probe, default_component);
     const std::string axis = axis_name(component), quantity = analysed_quantity(probe, component);
     const std::vector<double>& values = history.values[9 * p + component];
-    nlohmann::json probe_json = {{"component", analysed_label(probe, component)}};
-    const spectral::RingdownAnalysis analysis = spectral::analyse_ringdown(values, sampling, options);
-    nlohmann::json ringdown = output::ringdown_json(analysis);
-    if (modes) {
-      const nlohmann::json comparison = modal_comparison(*modes, setup, analysis.natural_frequency_hz);
-      if (!comparison.is_null()) ringdown["modal_comparison"] = comparison;
-    }
-    probe_json["ringdown"] = ringdown;
+    output::RingdownProbe entry{probe.name, analysed_label(probe, component),
+                                spectral::analyse_ringdown(values, sampling, options), {}, {}};
+    const spectral::RingdownAnalysis& analysis = entry.analysis;
+    if (modes) entry.comparison = modal_comparison(*modes, setup, analysis.natural_frequency_hz);
     out << "ringdown " << probe.name << " (" << quantity << "): f = " << std::setprecision(8) << analysis.frequency_hz
         << " Hz, damping ratio " << std::setprecision(4) << analysis.damping_ratio;
-    if (ringdown.contains("modal_comparison")) {
-      const nlohmann::json& comparison = ringdown["modal_comparison"];
-      out << ", " << comparison["reference"].get<std::string>() << " f = " << std::setprecision(8)
-          << comparison["reference_hz"].get<double>() << " Hz (" << std::setprecision(3)
-          << 100.0 * comparison["relative_difference"].get<double>() << " %)";
+    if (entry.comparison) {
+      out << ", " << entry.comparison->reference << " f = " << std::setprecision(8) << entry.comparison->reference_hz
+          << " Hz (" << std::setprecision(3) << 100.0 * entry.comparison->relative_difference << " %)";
     }
     if (analysis.harmonics.size() > 1) {
       out << std::setprecision(4);
@@ -265,7 +246,10 @@ void write_ringdown_spectrum(const scene::Scene& scene, const std::filesystem::p
     }
     out << "\n";
     std::optional<spectral::FrequencyResponse> frf;
-    if (pulse) frf = write_frf(directory, probe.name, values, history, sampling, *excitation, probe_json, out);
+    if (pulse) {
+      entry.frf.emplace();
+      frf = write_frf(directory, probe.name, values, history, sampling, *excitation, *entry.frf, out);
+    }
     if (spectrum.plots) {
       plot.title = probe.name + " " + quantity;
       const auto history_plot = spectral::plot_time_history(directory / ("history_" + probe.name + ".png"), values, sampling, plot);
@@ -283,16 +267,11 @@ void write_ringdown_spectrum(const scene::Scene& scene, const std::filesystem::p
       }
       if (!history_plot.written) out << "note: no plots (" << history_plot.note << ")\n";
     }
-    probes_json[probe.name] = probe_json;
+    probes.push_back(std::move(entry));
   }
-  nlohmann::json spectrum_json = {
-      {"excitation_hz", 0.0},
-      {"excitation", pulse ? "pulse" : (excitation ? excitation->kind : "none")},
-      {"amplitude_convention", "ringdown: peak amplitudes A_k of the orders k f of the dominant frequency f, "
-                               "the fitted decay removed (amplitudes at the analysis start time)"},
-      {"probes", probes_json}};
-  if (setup.release) spectrum_json["release"] = setup.release->kind;
-  io::write_json(directory / "spectrum.json", spectrum_json);
+  io::write_json(directory / "spectrum.json",
+                 output::ringdown_spectrum_json(pulse ? "pulse" : (excitation ? excitation->kind : "none"), probes,
+                                                setup.release ? setup.release->kind : std::string()));
 }
 
 }  // namespace crackle::pipeline

@@ -72,8 +72,6 @@ void add_completion(const SweepSettings& settings, int max_points, SweepResult& 
 
 }  // namespace
 
-double SweepPoint::frequency_hz() const { return solution.omega / kTwoPi; }
-
 std::vector<SweepProbe> sweep_probes(const scene::Scene& scene) {
   std::vector<SweepProbe> probes;
   const scene::TransientSection& section = *scene.transient;

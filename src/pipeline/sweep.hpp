@@ -20,19 +20,19 @@
 #include <nlohmann/json.hpp>
 
 #include "io/csv.hpp"
+#include "output/sweep_json.hpp"
 #include "reduced/system.hpp"
 #include "scene/scene.hpp"
 #include "plot/gnuplot.hpp"
+#include "sweep/curve.hpp"
 #include "sweep/harmonic_balance.hpp"
 
 namespace crackle::pipeline {
 
-/// A probe of the sweep: its name, the analysed displacement component and its output row.
-struct SweepProbe {
-  std::string name;
-  int component = 2;  ///< 0, 1, 2 for x, y, z
-  Index row = 0;      ///< row of the reduced system's outputs (3 p + component)
-};
+using sweep::SweepEvent;
+using sweep::SweepPoint;
+using sweep::SweepProbe;
+using sweep::SweepResult;
 
 /// Where the windows of SweepSettings::windows start from: per window, the gap harmonics of another
 /// sweep of the same body at the window's start (`harmonics` H of it, the layout of
@@ -60,40 +60,6 @@ struct SweepSettings {
 /// unless given), row 3 p + component.
 std::vector<SweepProbe> sweep_probes(const scene::Scene& scene);
 
-/// One solution point.
-struct SweepPoint {
-  sweep::Solution solution;     ///< omega, subharmonic, outputs (probe rows only), iterations, residual
-  bool stability_known = false; ///< the stability was computed (Floquet multipliers)
-  bool stable = true;
-  bool fold = false;            ///< a fold lies between the previous point and this one
-  bool period_doubling = false; ///< a multiplier crossed -1 there
-  int direction = 1;            ///< stepped_sine: +1 up, -1 down; harmonic_balance: +1
-  int periods = 0;              ///< stepped_sine: periods run to steady state
-  int segment = 0;              ///< harmonic_balance: 0 the first branch; 1, 2 the period-two branch down, up
-  double frequency_hz() const;
-};
-
-/// A fold or bifurcation found along the branch.
-struct SweepEvent {
-  std::string kind;        ///< fold, period_doubling, neimark_sacker, stability_change
-  double frequency_hz = 0.0;  ///< interpolated between the two points around it
-  std::size_t point = 0;   ///< index of the point after it
-  /// Where the unstable counts change: 1 when Hill's method finds the monodromy's counts at both
-  /// points around it, 0 when not; -1 not checked (sweep.json `hill_agrees`).
-  int hill_check = -1;
-};
-
-struct SweepResult {
-  std::vector<SweepPoint> points;
-  std::vector<SweepEvent> events;
-  std::vector<std::string> warnings;  ///< H-convergence, unsettled frequencies, an unfinished branch
-  double max_top_share = 0.0;         ///< largest top-harmonic share of the gap response
-  double solve_s = 0.0;               ///< seconds spent in the solver
-  std::string linear_solver;          ///< harmonic_balance: "dense" or "krylov" (of the period-one branch)
-  sweep::KrylovStatistics krylov;     ///< harmonic_balance with krylov: GMRES statistics (both branches)
-  bool completed = true;              ///< the branch reached the end of the range
-};
-
 /// Called after each point: points so far, and the fraction of the range covered.
 using SweepProgress = std::function<void(const SweepResult&, double fraction)>;
 
@@ -120,11 +86,8 @@ WindowStarts window_starts(const SweepResult& result, double from_hz, double to_
 SweepResult stepped_sine_sweep(const reduced::ReducedSystem& system, const SweepSettings& settings,
                                const SweepProgress& progress = SweepProgress());
 
-/// sweep.csv: one row per point (units in the header).
-io::CsvTable sweep_table(const SweepResult& result, const SweepSettings& settings);
-
-/// sweep.json: settings, the events, warnings and a per-probe summary (peaks of A2/A1, A3/A1).
-nlohmann::json sweep_json(const SweepResult& result, const SweepSettings& settings);
+/// What sweep.json and sweep.csv (output/sweep_json.hpp) state of `settings`.
+output::SweepFileSettings file_settings(const SweepSettings& settings);
 
 /// Response curve of one probe: A1, A2, A3 (and A1/2 with subharmonic 2) against frequency, log y,
 /// unstable parts dashed, f_b/2, f_b/3 and f_b marked when known.

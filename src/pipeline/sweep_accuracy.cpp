@@ -144,7 +144,7 @@ SettingEstimate estimate_setting(RefinementSweeps& sweeps, const Setting& settin
   SettingEstimate result;
   for (const Quantity& quantity : quantities_of(sweeps.get(setting).document)) {
     const accuracy::Estimate estimate = estimate_of(quantity, sweeps, setting);
-    result.json[nlohmann::json::json_pointer(quantity.pointer)] = estimate_json(estimate);
+    result.json[nlohmann::json::json_pointer(quantity.pointer)] = output::estimate_json(estimate);
     if (std::find(counted.begin(), counted.end(), quantity.tolerance_quantity) == counted.end()) continue;
     result.lines.push_back(estimate);
     add_to_summary(estimate, result.summary);
@@ -162,9 +162,9 @@ std::optional<Setting> refine(RefinementSweeps& sweeps, const Setting& setting, 
   if (n.coarse) {
     choices.push_back(mesh_choice(setting, sweeps.scene(), here * here / std::max(1e-3, sweeps.cost_s(*n.coarse))));
   }
-  choices.push_back({"modes", n.band, sweeps.cost_s(n.band)});
-  choices.push_back({"harmonics", n.harmonics, sweeps.cost_s(n.harmonics)});
-  if (sweeps.has_contact()) choices.push_back({"penalty", n.penalty, sweeps.cost_s(n.penalty)});
+  choices.push_back({"modes", n.band, sweeps.cost_s(n.band), ""});
+  choices.push_back({"harmonics", n.harmonics, sweeps.cost_s(n.harmonics), ""});
+  if (sweeps.has_contact()) choices.push_back({"penalty", n.penalty, sweeps.cost_s(n.penalty), ""});
   return choose_refinement(choices, summary, budget_left,
                            sweeps.box_mesh() && !n.coarse ? "mesh (not estimated below element order 3)"
                                                           : "none (no component has an error left)",
@@ -231,7 +231,7 @@ void sweep_with_accuracy(const scene::Scene& scene, const RunRoute& route, const
       "the whole range at half the points. Estimated: each probe's peaks (value and frequency, the parabola through the "
       "three points around the largest, or the value at a range end), the fold and period-doubling frequencies (by "
       "kind and order along the branch) and the bilinear frequency. delta: signed relative error of the value, " +
-      std::string(kEstimateFields);
+      std::string(output::kEstimateFields);
   accuracy["reached"] = setting_json(setting);
   if (!options.accuracy_start.empty() && plan.tolerance) accuracy["started_from"] = options.accuracy_start.string();
   accuracy.update(estimate.json);  // probes, bilinear_hz, events: each number's estimate at its own place

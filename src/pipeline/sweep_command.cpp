@@ -57,7 +57,7 @@ SweepProgress progress_line(std::ostream& progress, bool enabled) {
 /// sweep.csv and the plots (sweep.json is written by the caller, with the route and accuracy).
 void write_outputs(const fs::path& directory, const SweepResult& result, const SweepSettings& settings,
                    std::ostream& out) {
-  io::write_csv(directory / "sweep.csv", sweep_table(result, settings));
+  io::write_csv(directory / "sweep.csv", output::sweep_table(result, file_settings(settings)));
   if (!settings.section.plots) return;
   for (std::size_t p = 0; p < settings.probes.size(); ++p) {
     plot::PlotOptions plot;
@@ -130,7 +130,7 @@ SweepOutcome sweep_scene(const scene::Scene& scene, const SweepCommandOptions& o
   if (options.progress) progress << "\n";
   if (!stability_note.empty()) result.warnings.insert(result.warnings.begin(), stability_note);
 
-  nlohmann::json document = sweep_json(result, settings);
+  nlohmann::json document = output::sweep_json(result, file_settings(settings));
   const nlohmann::json stages =
       output::stages_json({modal_stage, reduction_stage, Stage{"sweep", true, settings.section.method, result.solve_s}});
   const Index unknowns = reduced.system.n_rows() * (2 * settings.section.harmonics + 1);

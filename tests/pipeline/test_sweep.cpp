@@ -224,7 +224,7 @@ TEST(SweepBilinear, SuperHarmonicPeakAtHalfTheBilinearFrequency) {
   const SweepResult result = harmonic_balance_sweep(s, settings);
   ASSERT_TRUE(result.completed);
   ASSERT_GE(result.points.size(), 200u);
-  const nlohmann::json document = sweep_json(result, settings);
+  const nlohmann::json document = output::sweep_json(result, file_settings(settings));
   const double peak_hz = document["probes"]["a"]["peak_a2_over_a1"]["frequency_hz"];
   EXPECT_NEAR(peak_hz / (0.5 * kBilinearHz), 1.0, 5e-3);
   EXPECT_GT(document["probes"]["a"]["peak_a2_over_a1"]["value"].get<double>(), 0.05);
@@ -327,7 +327,7 @@ TEST(SweepStability, SteppedSineJumpsWhereTheBranchFoldsAndTheMiddleIsUnstable) 
   }
   for (const SweepEvent& event : folds) EXPECT_EQ(event.hill_check, 1);
   // sweep.json says so per event
-  const nlohmann::json document = sweep_json(branch, settings);
+  const nlohmann::json document = output::sweep_json(branch, file_settings(settings));
   int agreeing = 0;
   for (const nlohmann::json& event : document["events"])
     if (event["kind"] == "fold") agreeing += event.value("hill_agrees", false) ? 1 : 0;
@@ -397,7 +397,7 @@ TEST(SweepFiles, TableJsonAndPlot) {
   SweepSettings settings = settings_for(0.45 * kBilinearHz, 0.55 * kBilinearHz, 6, 20);
   settings.bilinear_hz = kBilinearHz;
   const SweepResult result = harmonic_balance_sweep(s, settings);
-  const io::CsvTable table = sweep_table(result, settings);
+  const io::CsvTable table = output::sweep_table(result, file_settings(settings));
   ASSERT_EQ(table.headers.front(), "excitation frequency [Hz]");
   for (const std::string header : {"a u_x A1 [m]", "a u_x phase1 [rad]", "a u_x A6 [m]", "c u_z A0 [m]",
                                    "c u_z A2/A1 [-]", "c u_z A3/A1 [-]", "c u_z A1/2/A1 [-]",
@@ -406,7 +406,7 @@ TEST(SweepFiles, TableJsonAndPlot) {
     EXPECT_NE(std::find(table.headers.begin(), table.headers.end(), header), table.headers.end()) << header;
   }
   for (const auto& column : table.columns) EXPECT_EQ(column.size(), result.points.size());
-  const nlohmann::json document = sweep_json(result, settings);
+  const nlohmann::json document = output::sweep_json(result, file_settings(settings));
   for (const char* key : {"settings", "bilinear_hz", "points", "events", "warnings", "probes", "completed"})
     EXPECT_TRUE(document.contains(key)) << key;
   EXPECT_EQ(document["settings"]["harmonics"], 6);
@@ -429,11 +429,11 @@ TEST(SweepWindows, TheWindowsAroundThePeaksFindTheWholeRangesPeaks) {
   settings.section.stability = false;
   const SweepResult whole = harmonic_balance_sweep(s, settings);
   ASSERT_TRUE(whole.completed);
-  const nlohmann::json document = sweep_json(whole, settings);
+  const nlohmann::json document = output::sweep_json(whole, file_settings(settings));
   // the peaks converged in the sampling: the whole range at ten times the points
   SweepSettings finer = settings;
   finer.section.points = 2000;
-  const nlohmann::json fine = sweep_json(harmonic_balance_sweep(s, finer), finer);
+  const nlohmann::json fine = output::sweep_json(harmonic_balance_sweep(s, finer), file_settings(finer));
   const SweepWindows windows = sweep_windows(document, kPeakKeys);
   ASSERT_FALSE(windows.windows.empty()) << windows.reason;
   EXPECT_LT(windows.covered, 0.3);
@@ -449,7 +449,7 @@ TEST(SweepWindows, TheWindowsAroundThePeaksFindTheWholeRangesPeaks) {
     ASSERT_TRUE(part.completed) << (part.warnings.empty() ? "" : part.warnings.front());
     EXPECT_LT(part.points.size(), whole.points.size() / 2);
     EXPECT_EQ(part.points.back().segment + 1, static_cast<int>(windows.windows.size()));
-    const nlohmann::json found = sweep_json(part, windowed);
+    const nlohmann::json found = output::sweep_json(part, file_settings(windowed));
     EXPECT_EQ(found["settings"]["windows"].size(), windows.windows.size());
     std::string why;
     EXPECT_TRUE(windows_hold(windows, found, why)) << why;
@@ -475,7 +475,7 @@ TEST(SweepWindows, TheWindowsAroundThePeaksFindTheWholeRangesPeaks) {
   beside.peaks = {{"/probes/a/peak_a2_over_a1", 0}};
   SweepSettings off = settings;
   off.windows = beside.windows;
-  const nlohmann::json missed = sweep_json(harmonic_balance_sweep(s, off), off);
+  const nlohmann::json missed = output::sweep_json(harmonic_balance_sweep(s, off), file_settings(off));
   EXPECT_TRUE(missed[a2]["window_edge"].get<bool>());
   std::string why;
   EXPECT_FALSE(windows_hold(beside, missed, why));
@@ -487,7 +487,7 @@ TEST(SweepWindows, TheWindowsAroundThePeaksFindTheWholeRangesPeaks) {
 TEST(SweepWindows, TheWholeRangeWhereAWindowCouldMissTheBranch) {
   const reduced::ReducedSystem s = oscillator(0.01, 3.0, 5e-6, 0.5e-6);
   SweepSettings settings = settings_for(1.0 / kTwoPi, 1.3 / kTwoPi, 10, 100);
-  const nlohmann::json folded = sweep_json(harmonic_balance_sweep(s, settings), settings);
+  const nlohmann::json folded = output::sweep_json(harmonic_balance_sweep(s, settings), file_settings(settings));
   SweepWindows windows = sweep_windows(folded, kPeakKeys);
   EXPECT_TRUE(windows.windows.empty());
   EXPECT_NE(windows.reason.find("fold"), std::string::npos) << windows.reason;
@@ -495,7 +495,7 @@ TEST(SweepWindows, TheWholeRangeWhereAWindowCouldMissTheBranch) {
   const reduced::ReducedSystem b = bilinear_oscillator();
   SweepSettings plain = settings_for(0.42 * kBilinearHz, 0.58 * kBilinearHz, 20, 200);
   plain.section.stability = false;
-  nlohmann::json document = sweep_json(harmonic_balance_sweep(b, plain), plain);
+  nlohmann::json document = output::sweep_json(harmonic_balance_sweep(b, plain), file_settings(plain));
   ASSERT_FALSE(sweep_windows(document, kPeakKeys).windows.empty());
   nlohmann::json stepped = document;
   stepped["settings"]["method"] = "stepped_sine";
