@@ -1,4 +1,5 @@
 #include "identify/identify.hpp"
+#include "identify/identify_stages.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -52,8 +53,6 @@ constexpr double kForwardStep = 1e-4;
 constexpr double kAccept = 0.1;
 /// Gauss-Newton iterations on the forward model before Levenberg-Marquardt takes over.
 constexpr int kGaussNewtonIterations = 4;
-/// chi^2 quantile of 2 degrees of freedom at 95 % (the joint region of two unknowns).
-constexpr double kChi2Two95 = 5.991464547107979;
 
 [[noreturn]] void fail(const std::string& file, int line, const std::string& path, const std::string& expected,
                        const std::string& got) {
@@ -240,180 +239,6 @@ class Forward {
   int runs_ = 0;
 };
 
-struct Fitted {
-  VectorX theta;
-  double chi2 = 0.0;
-  VectorX residuals;
-  VectorX model;
-  fit::Uncertainty uncertainty;
-  std::vector<bool> at_bound;
-  bool converged = false;
-};
-
-json vector_json(const VectorX& v) {
-  json out = json::array();
-  for (Eigen::Index i = 0; i < v.size(); ++i) out.push_back(std::isfinite(v[i]) ? json(v[i]) : json(nullptr));
-  return out;
-}
-
-json matrix_json(const MatrixX& m) {
-  json out = json::array();
-  for (Eigen::Index r = 0; r < m.rows(); ++r) out.push_back(vector_json(m.row(r).transpose()));
-  return out;
-}
-
-json keyed(const IdentifySpec& spec, const VectorX& v) {
-  json out = json::object();
-  for (std::size_t j = 0; j < spec.unknowns.size(); ++j) out[spec.unknowns[j].key] = v[static_cast<Eigen::Index>(j)];
-  return out;
-}
-
-json intervals_json(const IdentifySpec& spec, const fit::Uncertainty& u) {
-  json out = json::object();
-  for (std::size_t j = 0; j < spec.unknowns.size(); ++j) {
-    const auto& interval = u.interval_95[j];
-    out[spec.unknowns[j].key] = {std::isfinite(interval[0]) ? json(interval[0]) : json(nullptr),
-                                 std::isfinite(interval[1]) ? json(interval[1]) : json(nullptr)};
-  }
-  return out;
-}
-
-std::string measurement_label(const Measurement& m) {
-  return m.quantity + (m.mode > 0 ? " mode " + std::to_string(m.mode) : "") +
-         (m.probe.empty() ? "" : " " + m.probe + " @ " + format_number(m.drive_hz) + " Hz");
-}
-
-/// The Gauss-Newton 95 % joint region of unknowns i and j (the ellipse of their marginal
-/// covariance), as gnuplot data; empty where the covariance has no finite positive block.
-std::string region_data(const Fitted& best, std::size_t i, std::size_t j) {
-  std::ostringstream region;
-  if (!best.uncertainty.covariance.allFinite()) return "";
-  const Eigen::Index a = static_cast<Eigen::Index>(i), b = static_cast<Eigen::Index>(j);
-  Eigen::Matrix2d block;
-  block << best.uncertainty.covariance(a, a), best.uncertainty.covariance(a, b), best.uncertainty.covariance(b, a),
-      best.uncertainty.covariance(b, b);
-  const Eigen::LLT<Eigen::Matrix2d> llt(block);
-  if (llt.info() != Eigen::Success) return "";
-  const Eigen::Matrix2d l = llt.matrixL();
-  const Eigen::Vector2d centre(best.theta[a], best.theta[b]);
-  for (int t = 0; t <= 100; ++t) {
-    const double angle = 2.0 * M_PI * t / 100.0;
-    const Eigen::Vector2d p = centre + std::sqrt(kChi2Two95) * l * Eigen::Vector2d(std::cos(angle), std::sin(angle));
-    region << p[0] << " " << p[1] << "\n";
-  }
-  return region.str();
-}
-
-/// gnuplot data of a misfit over two axes (row-major over the first): x y log10(chi^2), a blank line
-/// after each row.
-std::string surface_data(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>& chi2) {
-  std::ostringstream data;
-  for (std::size_t a = 0; a < x.size(); ++a) {
-    for (std::size_t b = 0; b < y.size(); ++b)
-      data << x[a] << " " << y[b] << " " << std::log10(chi2[a * y.size() + b] + 1e-300) << "\n";
-    data << "\n";
-  }
-  return data.str();
-}
-
-/// identify_map.png: chi^2 over the first two unknowns (or one; with more, its profile: the least
-/// over the others), the minima, the estimate and its 95 % joint region (the Gauss-Newton ellipse).
-/// Never throws: returns a note on failure.
-std::string plot_map(const fs::path& dir, const IdentifySpec& spec, const std::vector<std::vector<double>>& axes,
-                     const std::vector<double>& chi2, const std::vector<Fitted>& minima, const Fitted& best) {
-  plot::PlotOptions probe;
-  if (!plot::gnuplot_available(probe)) return "gnuplot not found: no plots";
-  std::ostringstream data, marks, script;
-  const std::size_t k = spec.unknowns.size();
-  if (k > 1) {
-    data << surface_data(axes[0], axes[1], chi2);
-  } else {
-    for (std::size_t flat = 0; flat < chi2.size(); ++flat) data << axes[0][flat] << " 0 " << std::log10(chi2[flat] + 1e-300) << "\n";
-  }
-  for (const Fitted& m : minima) marks << m.theta[0] << " " << (k > 1 ? m.theta[1] : m.chi2) << "\n";
-  io::write_file_atomic(dir / "identify_map.dat", "# " + spec.unknowns[0].key + (k > 1 ? " " + spec.unknowns[1].key : "") +
-                                                      " log10(chi2)\n" + data.str());
-  io::write_file_atomic(dir / "identify_minima.dat", marks.str());
-  io::write_file_atomic(dir / "identify_region.dat", k > 1 ? region_data(best, 0, 1) : "");
-  script << "# gnuplot script written by crackle identify; run: gnuplot identify_map.gp\n"
-         << "set terminal pngcairo size 900,700 noenhanced\nset output 'identify_map.png'\n";
-  script << "set xlabel " << plot::gnuplot_quote(spec.unknowns[0].key) << "\n"
-         << "set xrange [" << spec.unknowns[0].lower << ":" << spec.unknowns[0].upper << "]\n";
-  if (k > 1) script << "set yrange [" << spec.unknowns[1].lower << ":" << spec.unknowns[1].upper << "]\n";
-  if (k > 1) {
-    script << "set ylabel " << plot::gnuplot_quote(spec.unknowns[1].key) << "\n"
-           << "set title '" << (k > 2 ? "misfit profile log10(chi^2) (least over the other unknowns)" : "misfit log10(chi^2)")
-           << ", the minima (circles) and the 95 % region of the estimate'\n"
-           << "set view map\nset pm3d map interpolate 4,4\nset palette rgb 33,13,10\n"
-           << "splot 'identify_map.dat' using 1:2:3 with pm3d notitle, "
-           << "'identify_minima.dat' using 1:2:(0) with points pt 7 ps 1.5 lc rgb 'white' title 'minima', "
-           << "'identify_region.dat' using 1:2:(0) with lines lw 2 lc rgb 'white' title '95 %'\n";
-  } else {
-    script << "set ylabel 'log10(chi^2)'\nplot 'identify_map.dat' using 1:3 with linespoints title 'map', "
-           << "'identify_minima.dat' using 1:(log10($2)) with points pt 7 ps 1.5 title 'minima'\n";
-  }
-  io::write_file_atomic(dir / "identify_map.gp", script.str());
-  const plot::PlotResult drawn = plot::run_gnuplot(dir / "identify_map.png", dir / "identify_map.gp", probe);
-  return drawn.written ? "" : drawn.note;
-}
-
-/// identify_profiles.png (three unknowns or more): one panel per pair of unknowns, its profile
-/// log10(chi^2), the estimate and the Gauss-Newton 95 % region of the pair. Never throws.
-std::string plot_profiles(const fs::path& dir, const IdentifySpec& spec, const std::vector<std::vector<double>>& axes,
-                          const std::vector<fit::Profile>& profiles, const Fitted& best) {
-  plot::PlotOptions probe;
-  if (!plot::gnuplot_available(probe)) return "gnuplot not found: no plots";
-  const std::size_t panels = profiles.size();
-  const std::size_t columns = std::min<std::size_t>(panels, 3), rows = (panels + columns - 1) / columns;
-  std::ostringstream script;
-  script << "# gnuplot script written by crackle identify; run: gnuplot identify_profiles.gp\n"
-         << "set terminal pngcairo size " << 500 * columns << "," << 450 * rows << " noenhanced\n"
-         << "set output 'identify_profiles.png'\nset view map\nset pm3d map interpolate 4,4\n"
-         << "set palette rgb 33,13,10\nunset key\nset lmargin 12\nset xtics rotate by -30\nset multiplot layout " << rows << "," << columns
-         << " title 'misfit profiles log10(chi^2): the least over the other unknowns; the estimate and its 95 % region'\n";
-  for (std::size_t q = 0; q < panels; ++q) {
-    const fit::Profile& p = profiles[q];
-    const std::string name = "identify_profile_" + std::to_string(p.first + 1) + "_" + std::to_string(p.second + 1);
-    io::write_file_atomic(dir / (name + ".dat"), "# " + spec.unknowns[p.first].key + " " + spec.unknowns[p.second].key +
-                                                     " log10(chi2)\n" + surface_data(axes[p.first], axes[p.second], p.chi2));
-    io::write_file_atomic(dir / (name + "_region.dat"), region_data(best, p.first, p.second));
-    std::ostringstream estimate;
-    estimate << best.theta[static_cast<Eigen::Index>(p.first)] << " " << best.theta[static_cast<Eigen::Index>(p.second)] << "\n";
-    io::write_file_atomic(dir / (name + "_estimate.dat"), estimate.str());
-    const Unknown& x = spec.unknowns[p.first];
-    const Unknown& y = spec.unknowns[p.second];
-    script << "set xlabel " << plot::gnuplot_quote(x.key) << "\nset ylabel " << plot::gnuplot_quote(y.key) << "\n"
-           << "set xrange [" << x.lower << ":" << x.upper << "]\nset yrange [" << y.lower << ":" << y.upper << "]\n"
-           << "splot '" << name << ".dat' using 1:2:3 with pm3d, '" << name
-           << "_region.dat' using 1:2:(0) with lines lw 2 lc rgb 'white', '" << name
-           << "_estimate.dat' using 1:2:(0) with points pt 7 ps 1.2 lc rgb 'white'\n";
-  }
-  script << "unset multiplot\n";
-  io::write_file_atomic(dir / "identify_profiles.gp", script.str());
-  const plot::PlotResult drawn = plot::run_gnuplot(dir / "identify_profiles.png", dir / "identify_profiles.gp", probe);
-  return drawn.written ? "" : drawn.note;
-}
-
-std::string plot_fit(const fs::path& dir, const IdentifySpec& spec, const Fitted& best, const VectorX& weights) {
-  plot::PlotOptions probe;
-  if (!plot::gnuplot_available(probe)) return "gnuplot not found: no plots";
-  std::ostringstream data;
-  data << "# index measured sigma model weight(sqrt(sigma^2+eps^2)) label\n";
-  for (std::size_t i = 0; i < spec.measured.size(); ++i) {
-    const Measurement& m = spec.measured[i];
-    data << i + 1 << " " << m.value << " " << m.sigma << " " << best.model[static_cast<Eigen::Index>(i)] << " "
-         << weights[static_cast<Eigen::Index>(i)] << " \"" << measurement_label(m) << "\"\n";
-  }
-  plot::PlotOptions options;
-  options.title = "measured (sigma bars) against fitted (model-error bars), normalised by the measured value";
-  options.width = 900;
-  const std::string body =
-      "set ylabel 'value / measured [-]'\nset xtics rotate by -30\nset offsets 0.5,0.5,0,0\n"
-      "plot 'identify_fit.dat' using 1:(1):($3/$2):xtic(6) with yerrorbars pt 7 title 'measured', "
-      "'' using ($1+0.1):($4/$2):($5/$2) with yerrorbars pt 5 title 'fitted'\n";
-  const plot::PlotResult drawn = plot::plot_script(dir / "identify_fit.png", data.str(), body, options);
-  return drawn.written ? "" : drawn.note;
-}
 
 }  // namespace
 
@@ -553,15 +378,11 @@ IdentifySpec parse_identify_section(const std::string& text, const std::string& 
   return spec;
 }
 
-json run_identify(const IdentifyOptions& options, std::ostream& log) {
-  const auto start = std::chrono::steady_clock::now();
-  const std::string& file = options.scene_path;
-  const std::string text = scene::read_scene_file(file);
-  IdentifySpec spec = parse_identify_section(text, file);
-  const scene::Scene scene = scene::parse_scene(text, file);
-  const std::size_t k = spec.unknowns.size(), n = spec.measured.size();
+namespace {
 
-  // ---- checks against the scene
+/// Refuses measurements the scene cannot compute (a probe it lacks, a harmonic ratio without a
+/// harmonic excitation, a mode it does not solve) and unknowns no measured quantity depends on.
+void check_against_scene(const IdentifySpec& spec, const scene::Scene& scene, const std::string& file) {
   for (const Measurement& m : spec.measured) {
     if (!is_frequency(m.quantity)) {
       bool found = false;
@@ -597,6 +418,295 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
                        : "the measured frequencies (crackle modal) do not depend on; measure a damping_ratio or a "
                          "harmonic ratio (A2/A1, A3/A1 at a drive_hz: crackle sweep) to identify it, or drop it"));
   }
+}
+
+/// The map's axes (map_points values per unknown, the bounds included) and its points, row-major.
+void map_grid(const IdentifySpec& spec, std::vector<std::vector<double>>& axes, std::vector<VectorX>& grid) {
+  const std::size_t k = spec.unknowns.size();
+  axes.assign(k, {});
+  std::size_t total = 1;
+  for (std::size_t j = 0; j < k; ++j) {
+    for (int i = 0; i < spec.map_points; ++i)
+      axes[j].push_back(spec.unknowns[j].lower + (spec.unknowns[j].upper - spec.unknowns[j].lower) * i / (spec.map_points - 1));
+    total *= axes[j].size();
+  }
+  for (std::size_t flat = 0; flat < total; ++flat) {
+    VectorX theta(static_cast<Eigen::Index>(k));
+    std::size_t rest = flat;
+    for (std::size_t j = k; j-- > 0;) {
+      theta[static_cast<Eigen::Index>(j)] = axes[j][rest % axes[j].size()];
+      rest /= axes[j].size();
+    }
+    grid.push_back(theta);
+  }
+}
+
+/// chi^2 of a model against the measured values with `weights`; infinite where a value is missing.
+double chi2_of(const VectorX& model, const VectorX& values, const VectorX& weights) {
+  const VectorX r = (model - values).cwiseQuotient(weights);
+  return r.allFinite() ? r.squaredNorm() : std::numeric_limits<double>::infinity();
+}
+
+/// The weighted residuals of the forward model by parameter vector, each computed once (fit_bounded
+/// asks for its start, its end and their Jacobians again, which an earlier batch already has); each
+/// batch of new vectors runs in DIR/fit/NNNN.
+class ForwardResiduals {
+ public:
+  ForwardResiduals(Forward& forward, const VectorX& values, const VectorX& weights, fs::path folder)
+      : forward_(forward), values_(values), weights_(weights), folder_(std::move(folder)) {}
+
+  std::vector<VectorX> operator()(const std::vector<VectorX>& thetas) {
+    std::vector<VectorX> missing;
+    for (const VectorX& theta : thetas)
+      if (!computed_.count(key(theta))) missing.push_back(theta);
+    if (!missing.empty()) {
+      char name[16];
+      std::snprintf(name, sizeof name, "%04d", batch_++);
+      const std::vector<VectorX> models = forward_.models(missing, folder_ / name, false);
+      for (std::size_t i = 0; i < missing.size(); ++i) computed_[key(missing[i])] = (models[i] - values_).cwiseQuotient(weights_);
+    }
+    std::vector<VectorX> out;
+    for (const VectorX& theta : thetas) out.push_back(computed_.at(key(theta)));
+    return out;
+  }
+
+ private:
+  static std::vector<double> key(const VectorX& theta) { return std::vector<double>(theta.data(), theta.data() + theta.size()); }
+  Forward& forward_;
+  const VectorX& values_;
+  const VectorX& weights_;
+  fs::path folder_;
+  std::map<std::vector<double>, VectorX> computed_;
+  int batch_ = 0;
+};
+
+/// A local fit on the forward model from the interpolant's estimate `start`: Gauss-Newton until its
+/// step is below kAccept of the estimate's standard deviation (each iteration one batch: the point
+/// and its Jacobian); Levenberg-Marquardt takes over when a step does not lower chi^2.
+detail::Fitted fit_minimum(const fit::BatchResiduals& on_model, const VectorX& start, const fit::Bounds& bounds,
+                           const VectorX& steps, bool scale_by_fit, const std::string& which, std::ostream& log,
+                           int& gauss_newton, int& levenberg_marquardt) {
+  VectorX theta = start;
+  fit::FitResult result;
+  bool accepted = false;
+  double previous = std::numeric_limits<double>::infinity();
+  for (int iteration = 0; iteration < kGaussNewtonIterations && !accepted; ++iteration) {
+    std::vector<VectorX> points = {theta};
+    for (const VectorX& point : fit::jacobian_points(theta, bounds, steps)) points.push_back(point);
+    on_model(points);
+    const VectorX r0 = on_model({theta}).front();
+    if (!r0.allFinite() || !(r0.squaredNorm() < previous)) break;
+    previous = r0.squaredNorm();
+    ++gauss_newton;
+    const MatrixX j0 = fit::jacobian(on_model, theta, r0, bounds, steps);
+    const fit::Uncertainty u0 = fit::uncertainty(j0, theta, r0.squaredNorm(), scale_by_fit);
+    if (!j0.allFinite() || u0.rank_deficient) break;
+    // The Gauss-Newton step, kept inside the bounds, in units of the covariance (Mahalanobis).
+    const VectorX step = j0.colPivHouseholderQr().solve(-r0);
+    const VectorX moved = (theta + step).cwiseMax(bounds.lower).cwiseMin(bounds.upper) - theta;
+    const double change = (r0.squaredNorm() - (r0 + j0 * moved).squaredNorm()) / u0.s2;
+    const double step_in_sd = std::sqrt(std::max(change, 0.0));
+    log << "identify: minimum " << which << ", Gauss-Newton iteration " << iteration + 1 << ": chi2 "
+        << format_number(r0.squaredNorm()) << ", step " << format_number(step_in_sd) << " sd\n";
+    if (step_in_sd <= kAccept) {
+      accepted = true;
+      result.theta = theta;
+      result.residuals = r0;
+      result.jacobian = j0;
+      result.chi2 = r0.squaredNorm();
+      result.converged = true;
+      result.at_bound = fit::at_bounds(theta, bounds);
+    } else {
+      theta += moved;
+    }
+  }
+  if (!accepted) {
+    fit::FitOptions exact;
+    exact.steps = steps;
+    exact.max_iterations = 8;
+    exact.function_tolerance = 1e-8;
+    exact.parameter_tolerance = 1e-7;
+    log << "identify: minimum " << which << ": Levenberg-Marquardt on the forward model\n";
+    result = fit::fit_bounded(on_model, start, bounds, exact);
+    ++levenberg_marquardt;
+  }
+  detail::Fitted f;
+  f.theta = result.theta;
+  f.chi2 = result.chi2;
+  f.residuals = result.residuals;
+  f.at_bound = result.at_bound;
+  f.converged = result.converged;
+  f.uncertainty = fit::uncertainty(result.jacobian, result.theta, result.chi2, scale_by_fit);
+  return f;
+}
+
+/// The fitted minima, the best first; starts that converged to the same point are one minimum.
+std::vector<detail::Fitted> distinct_minima(std::vector<detail::Fitted> fitted, const fit::Bounds& bounds) {
+  std::sort(fitted.begin(), fitted.end(), [](const detail::Fitted& a, const detail::Fitted& b) { return a.chi2 < b.chi2; });
+  std::vector<detail::Fitted> distinct;
+  for (const detail::Fitted& f : fitted) {
+    bool same = false;
+    for (const detail::Fitted& d : distinct)
+      same = same || ((f.theta - d.theta).cwiseQuotient(bounds.upper - bounds.lower).cwiseAbs().maxCoeff() < 1e-3);
+    if (!same) distinct.push_back(f);
+  }
+  return distinct;
+}
+
+/// Why the best minimum does not identify the unknowns (empty: it does).
+std::vector<std::string> identifiability(const IdentifySpec& spec, const std::vector<detail::Fitted>& minima) {
+  const std::size_t k = spec.unknowns.size(), n = spec.measured.size();
+  const detail::Fitted& best = minima.front();
+  std::vector<std::string> reasons;
+  if (n < k) reasons.push_back(std::to_string(n) + " measurements for " + std::to_string(k) + " unknowns");
+  if (best.uncertainty.rank_deficient)
+    reasons.push_back("the Jacobian has rank " + std::to_string(best.uncertainty.rank) + " < " + std::to_string(k) +
+                      ": some combination of the unknowns does not change the measured quantities");
+  for (std::size_t j = 0; j < k; ++j)
+    if (best.at_bound[j]) reasons.push_back(spec.unknowns[j].key + " is at a bound: its interval is not reliable");
+  for (std::size_t d = 1; d < minima.size(); ++d)
+    if (minima[d].chi2 - best.chi2 < kEqualFit)
+      reasons.push_back("several minima fit equally well (chi2 " + format_number(best.chi2) + " and " +
+                        format_number(minima[d].chi2) + "): see minima");
+  return reasons;
+}
+
+/// A synthetic test's `truth`: the error against the truth, and the Cramer-Rao bound there (the
+/// Gauss-Newton covariance with the sigmas trusted, DETECTION.md sec. 2) from one batch of runs.
+json truth_json(Forward& forward, const detail::IdentifyFigures& f, const fit::Bounds& bounds) {
+  const IdentifySpec& spec = f.spec;
+  const std::size_t k = spec.unknowns.size(), n = spec.measured.size();
+  const detail::Fitted& best = f.best();
+  const VectorX truth = Eigen::Map<const VectorX>(spec.truth.data(), static_cast<Eigen::Index>(k));
+  const VectorX steps = VectorX::Constant(static_cast<Eigen::Index>(k), kForwardStep);
+  std::vector<VectorX> points = {truth};
+  for (const VectorX& point : fit::jacobian_points(truth, bounds, steps)) points.push_back(point);
+  const std::vector<VectorX> models = forward.models(points, f.map_dir / "truth", false);
+  MatrixX jacobian(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(k));
+  for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(k); ++j)
+    jacobian.col(j) = (models[static_cast<std::size_t>(j) + 1] - models[0]).cwiseQuotient(f.weights) /
+                      (points[static_cast<std::size_t>(j) + 1][j] - truth[j]);
+  const fit::Uncertainty bound = fit::uncertainty(jacobian, truth, 0.0, false);
+  // The same with the measurement noise alone (no model error in the weights): the scatter that
+  // noise alone would give an unbiased estimator.
+  const MatrixX noise_jacobian = f.weights.cwiseQuotient(f.sigma).asDiagonal() * jacobian;
+  const fit::Uncertainty noise_bound = fit::uncertainty(noise_jacobian, truth, 0.0, false);
+  json inside = json::object(), error = json::object(), in_bound = json::object();
+  for (std::size_t j = 0; j < k; ++j) {
+    const Eigen::Index jj = static_cast<Eigen::Index>(j);
+    const auto& interval = best.uncertainty.interval_95[j];
+    inside[spec.unknowns[j].key] = interval[0] <= truth[jj] && truth[jj] <= interval[1];
+    error[spec.unknowns[j].key] = best.theta[jj] - truth[jj];
+    in_bound[spec.unknowns[j].key] = (best.theta[jj] - truth[jj]) / bound.sd[jj];
+  }
+  return {{"value", detail::keyed(spec, truth)}, {"error", error}, {"inside_95", inside},
+          {"cramer_rao_sd", detail::keyed(spec, bound.sd)}, {"error_in_cramer_rao_sd", in_bound},
+          {"cramer_rao_noise_sd", detail::keyed(spec, noise_bound.sd)},
+          {"chi2_at_truth", ((models[0] - f.values).cwiseQuotient(f.weights)).squaredNorm()}};
+}
+
+/// Stages 1 and 2: the map, and the model error in the middle of the bounds (the reference crack;
+/// independent of the measurements, so a cached map keeps it too) from the orders p, p+1, p+2
+/// (Richardson): one batch, the highest order first (the longest run starts while the map fills
+/// the other cores). Sets the figures' map, measurements, model error and weights; returns the
+/// map's models, and the map minima to start local fits from in `starts`.
+std::vector<VectorX> map_and_model_error(Forward& forward, int p, const fit::Bounds& bounds, std::ostream& log,
+                                         detail::IdentifyFigures& figures, std::vector<std::size_t>& starts) {
+  const IdentifySpec& spec = figures.spec;
+  const std::size_t n = spec.measured.size();
+  const VectorX middle = 0.5 * (bounds.lower + bounds.upper);
+  const std::vector<int> levels = refinement_orders(p);
+  log << "identify: map of " << figures.grid.size() << " forward runs (" << spec.map_points << " per unknown) and the model error "
+      << "from the orders " << levels[0] << ", " << levels[1] << ", " << levels[2] << " in the middle of the bounds\n";
+  std::vector<VectorX> map_batch = {middle, middle, middle};
+  std::vector<int> orders = {levels[2], levels[1], levels[0]};
+  for (const VectorX& theta : figures.grid) {
+    map_batch.push_back(theta);
+    orders.push_back(p);
+  }
+  const std::vector<VectorX> batch_models = forward.models(map_batch, figures.map_dir, true, orders);
+  const std::vector<VectorX> level_models = {batch_models[2], batch_models[1], batch_models[0]};
+  std::vector<VectorX> map_models(batch_models.begin() + 3, batch_models.end());
+  figures.values.resize(static_cast<Eigen::Index>(n));
+  figures.sigma.resize(static_cast<Eigen::Index>(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    figures.values[static_cast<Eigen::Index>(i)] = spec.measured[i].value;
+    figures.sigma[static_cast<Eigen::Index>(i)] = spec.measured[i].sigma;
+  }
+  const VectorX& values = figures.values;
+  for (const VectorX& m : map_models) figures.map_chi2.push_back(chi2_of(m, values, figures.sigma));
+  if (fit::grid_minima(figures.axes, figures.map_chi2).empty())
+    throw SolverError("identify: no finite misfit on the map (no mode paired anywhere)");
+
+  figures.model_error.resize(static_cast<Eigen::Index>(n));
+  figures.error_verified.assign(n, true);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Index ii = static_cast<Eigen::Index>(i);
+    const RefinementError error =
+        refinement_error(level_models[0][ii], level_models[1][ii], level_models[2][ii], p - levels.front());
+    // Relative to the value, carried to every parameter vector.
+    figures.model_error[ii] = error.relative;
+    figures.error_verified[i] = error.verified;
+  }
+  // Weights from the measured values (fixed during the fit: the estimate's relative error times them).
+  figures.weights.resize(static_cast<Eigen::Index>(n));
+  for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(n); ++i) {
+    const double eps = figures.model_error[i] * std::abs(values[i]);
+    figures.weights[i] = std::sqrt(figures.sigma[i] * figures.sigma[i] + eps * eps);
+  }
+  const VectorX& weights = figures.weights;
+  figures.map_chi2.clear();
+  for (const VectorX& m : map_models) figures.map_chi2.push_back(chi2_of(m, values, weights));
+  const std::vector<std::size_t> minima = fit::grid_minima(figures.axes, figures.map_chi2);
+  figures.best_map = figures.map_chi2[minima.front()];
+  for (std::size_t index : minima)
+    if (figures.map_chi2[index] <= figures.best_map + kMinimaSpread && starts.size() < kMaxStarts) starts.push_back(index);
+  figures.starts = starts.size();
+  return map_models;
+}
+
+/// Stage 3: a local fit from each start, on the map's interpolant (`on_spline`) and then on the
+/// forward model (one batch checks every interpolant estimate and its Jacobian first); sets the
+/// figures' distinct minima and the fits' counts.
+void local_fits(Forward& forward, const fit::BatchResiduals& on_spline, const std::vector<std::size_t>& starts,
+                const fit::Bounds& bounds, const fs::path& dir, std::ostream& log, detail::IdentifyFigures& figures) {
+  const std::size_t k = figures.spec.unknowns.size();
+  const VectorX& values = figures.values;
+  const VectorX& weights = figures.weights;
+  ForwardResiduals residuals(forward, values, weights, dir / "fit");
+  const fit::BatchResiduals on_model = [&](const std::vector<VectorX>& thetas) { return residuals(thetas); };
+  const VectorX steps = VectorX::Constant(static_cast<Eigen::Index>(k), kForwardStep);
+  fit::FitOptions smooth;
+  smooth.steps = VectorX::Constant(static_cast<Eigen::Index>(k), 1e-6);
+  std::vector<VectorX> smooth_estimates, check_points;
+  for (std::size_t s : starts) {
+    smooth_estimates.push_back(fit::fit_bounded(on_spline, figures.grid[s], bounds, smooth).theta);
+    check_points.push_back(smooth_estimates.back());
+    for (const VectorX& point : fit::jacobian_points(smooth_estimates.back(), bounds, steps)) check_points.push_back(point);
+  }
+  log << "identify: the forward model at the interpolant's " << starts.size() << " estimate(s) and their Jacobians ("
+      << check_points.size() << " runs)\n";
+  on_model(check_points);
+  std::vector<detail::Fitted> fitted;
+  for (std::size_t s = 0; s < starts.size(); ++s) {
+    const std::string which = std::to_string(s + 1) + "/" + std::to_string(starts.size());
+    fitted.push_back(fit_minimum(on_model, smooth_estimates[s], bounds, steps, figures.spec.scale_by_fit, which, log,
+                                 figures.gauss_newton, figures.levenberg_marquardt));
+    fitted.back().model = fitted.back().residuals.cwiseProduct(weights) + values;
+  }
+  figures.minima = distinct_minima(std::move(fitted), bounds);
+}
+
+}  // namespace
+
+json run_identify(const IdentifyOptions& options, std::ostream& log) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::string& file = options.scene_path;
+  const std::string text = scene::read_scene_file(file);
+  IdentifySpec spec = parse_identify_section(text, file);
+  const scene::Scene scene = scene::parse_scene(text, file);
+  const std::size_t k = spec.unknowns.size(), n = spec.measured.size();
+  check_against_scene(spec, scene, file);
   YAML::Node base = scene::parse_yaml(text, file);
   base.remove("identify");
   base.remove("study");
@@ -612,361 +722,54 @@ json run_identify(const IdentifyOptions& options, std::ostream& log) {
     bounds.lower[static_cast<Eigen::Index>(j)] = spec.unknowns[j].lower;
     bounds.upper[static_cast<Eigen::Index>(j)] = spec.unknowns[j].upper;
   }
-
-  // ---- 1. the map
-  std::vector<std::vector<double>> axes(k);
-  std::size_t total = 1;
-  for (std::size_t j = 0; j < k; ++j) {
-    for (int i = 0; i < spec.map_points; ++i)
-      axes[j].push_back(spec.unknowns[j].lower + (spec.unknowns[j].upper - spec.unknowns[j].lower) * i / (spec.map_points - 1));
-    total *= axes[j].size();
-  }
-  std::vector<VectorX> grid;
-  for (std::size_t flat = 0; flat < total; ++flat) {
-    VectorX theta(static_cast<Eigen::Index>(k));
-    std::size_t rest = flat;
-    for (std::size_t j = k; j-- > 0;) {
-      theta[static_cast<Eigen::Index>(j)] = axes[j][rest % axes[j].size()];
-      rest /= axes[j].size();
-    }
-    grid.push_back(theta);
-  }
-  // ---- 1 and 2: the map, and the model error in the middle of the bounds (the reference crack;
-  // independent of the measurements, so a cached map keeps it too) from the orders p, p+1, p+2
-  // (Richardson): one batch, the highest order first (the longest run starts while the map fills
-  // the other cores).
-  const VectorX middle = 0.5 * (bounds.lower + bounds.upper);
-  const int p = scene.box.order;
-  const std::vector<int> levels = refinement_orders(p);
-  const int first = levels.front();
-  log << "identify: map of " << total << " forward runs (" << spec.map_points << " per unknown) and the model error "
-      << "from the orders " << levels[0] << ", " << levels[1] << ", " << levels[2] << " in the middle of the bounds\n";
-  const fs::path map_dir = options.map_cache.empty() ? dir / "map" : fs::path(options.map_cache);
-  std::vector<VectorX> map_batch = {middle, middle, middle};
-  std::vector<int> orders = {levels[2], levels[1], levels[0]};
-  for (const VectorX& theta : grid) {
-    map_batch.push_back(theta);
-    orders.push_back(p);
-  }
-  const std::vector<VectorX> batch_models = forward.models(map_batch, map_dir, true, orders);
-  const std::vector<VectorX> level_models = {batch_models[2], batch_models[1], batch_models[0]};
-  const std::vector<VectorX> map_models(batch_models.begin() + 3, batch_models.end());
-  const int map_runs = static_cast<int>(total);
-
-  VectorX values(static_cast<Eigen::Index>(n)), sigma(static_cast<Eigen::Index>(n));
-  for (std::size_t i = 0; i < n; ++i) {
-    values[static_cast<Eigen::Index>(i)] = spec.measured[i].value;
-    sigma[static_cast<Eigen::Index>(i)] = spec.measured[i].sigma;
-  }
-  auto chi2_of = [&](const VectorX& model, const VectorX& weights) {
-    const VectorX r = (model - values).cwiseQuotient(weights);
-    return r.allFinite() ? r.squaredNorm() : std::numeric_limits<double>::infinity();
-  };
-  std::vector<double> map_chi2;
-  for (const VectorX& m : map_models) map_chi2.push_back(chi2_of(m, sigma));
-  std::vector<std::size_t> minima = fit::grid_minima(axes, map_chi2);
-  if (minima.empty()) throw SolverError("identify: no finite misfit on the map (no mode paired anywhere)");
-
-  VectorX model_error(static_cast<Eigen::Index>(n));
-  std::vector<bool> error_verified(n, true);
-  for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Index ii = static_cast<Eigen::Index>(i);
-    const RefinementError error =
-        refinement_error(level_models[0][ii], level_models[1][ii], level_models[2][ii], p - first);
-    // Relative to the value, carried to every parameter vector.
-    model_error[ii] = error.relative;
-    error_verified[i] = error.verified;
-  }
-  auto weights_at = [&](const VectorX& model) {
-    VectorX w(static_cast<Eigen::Index>(n));
-    for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(n); ++i) {
-      const double eps = model_error[i] * std::abs(std::isfinite(model[i]) ? model[i] : values[i]);
-      w[i] = std::sqrt(sigma[i] * sigma[i] + eps * eps);
-    }
-    return w;
-  };
-  // Weights from the measured values (fixed during the fit: the estimate's relative error times them).
-  const VectorX weights = weights_at(values);
-  map_chi2.clear();
-  for (const VectorX& m : map_models) map_chi2.push_back(chi2_of(m, weights));
-  minima = fit::grid_minima(axes, map_chi2);
-  const double best_map = map_chi2[minima.front()];
+  detail::IdentifyFigures figures(spec);
+  figures.reference_at = std::stod(base["crack"]["reference"]["at"].Scalar());
+  map_grid(spec, figures.axes, figures.grid);
+  // ---- 1 and 2: the map and the model error
+  figures.map_dir = options.map_cache.empty() ? dir / "map" : fs::path(options.map_cache);
   std::vector<std::size_t> starts;
-  for (std::size_t index : minima)
-    if (map_chi2[index] <= best_map + kMinimaSpread && starts.size() < kMaxStarts) starts.push_back(index);
+  const std::vector<VectorX> map_models = map_and_model_error(forward, scene.box.order, bounds, log, figures, starts);
 
   // ---- 3. local fits: on the map's interpolant; the forward model checks each (one batch for all)
-  const fit::TensorSpline spline(axes, map_models);
+  const fit::TensorSpline spline(figures.axes, map_models);
   const fit::BatchResiduals on_spline = [&](const std::vector<VectorX>& thetas) {
     std::vector<VectorX> out;
-    for (const VectorX& theta : thetas) out.push_back((spline(theta) - values).cwiseQuotient(weights));
+    for (const VectorX& theta : thetas) out.push_back((spline(theta) - figures.values).cwiseQuotient(figures.weights));
     return out;
   };
-  // Forward residuals by parameter vector, each computed once: fit_bounded asks for its start, its
-  // end and their Jacobians again, which the check batch below already has.
-  std::map<std::vector<double>, VectorX> computed;
-  int batch = 0;
-  const fit::BatchResiduals on_model = [&](const std::vector<VectorX>& thetas) {
-    std::vector<VectorX> missing;
-    for (const VectorX& theta : thetas)
-      if (!computed.count(std::vector<double>(theta.data(), theta.data() + theta.size()))) missing.push_back(theta);
-    if (!missing.empty()) {
-      char name[16];
-      std::snprintf(name, sizeof name, "%04d", batch++);
-      const std::vector<VectorX> models = forward.models(missing, dir / "fit" / name, false);
-      for (std::size_t i = 0; i < missing.size(); ++i)
-        computed[std::vector<double>(missing[i].data(), missing[i].data() + missing[i].size())] =
-            (models[i] - values).cwiseQuotient(weights);
-    }
-    std::vector<VectorX> out;
-    for (const VectorX& theta : thetas) out.push_back(computed.at(std::vector<double>(theta.data(), theta.data() + theta.size())));
-    return out;
-  };
-  const VectorX steps = VectorX::Constant(static_cast<Eigen::Index>(k), kForwardStep);
-  std::vector<VectorX> smooth_estimates, check_points;
-  for (std::size_t s = 0; s < starts.size(); ++s) {
-    fit::FitOptions smooth;
-    smooth.steps = VectorX::Constant(static_cast<Eigen::Index>(k), 1e-6);
-    smooth_estimates.push_back(fit::fit_bounded(on_spline, grid[starts[s]], bounds, smooth).theta);
-    check_points.push_back(smooth_estimates.back());
-    for (const VectorX& point : fit::jacobian_points(smooth_estimates.back(), bounds, steps)) check_points.push_back(point);
-  }
-  log << "identify: the forward model at the interpolant's " << starts.size() << " estimate(s) and their Jacobians ("
-      << check_points.size() << " runs)\n";
-  on_model(check_points);
-  std::vector<Fitted> fitted;
-  int forward_fits = 0, gauss_newton = 0;
-  for (std::size_t s = 0; s < starts.size(); ++s) {
-    // Gauss-Newton on the forward model from the interpolant's estimate, until its step is below
-    // kAccept of the estimate's standard deviation (each iteration one batch: the point and its
-    // Jacobian); Levenberg-Marquardt takes over when a step does not lower chi^2.
-    VectorX theta = smooth_estimates[s];
-    fit::FitResult result;
-    bool accepted = false;
-    double previous = std::numeric_limits<double>::infinity();
-    for (int iteration = 0; iteration < kGaussNewtonIterations && !accepted; ++iteration) {
-      std::vector<VectorX> points = {theta};
-      for (const VectorX& point : fit::jacobian_points(theta, bounds, steps)) points.push_back(point);
-      on_model(points);
-      const VectorX r0 = on_model({theta}).front();
-      if (!r0.allFinite() || !(r0.squaredNorm() < previous)) break;
-      previous = r0.squaredNorm();
-      ++gauss_newton;
-      const MatrixX j0 = fit::jacobian(on_model, theta, r0, bounds, steps);
-      const fit::Uncertainty u0 = fit::uncertainty(j0, theta, r0.squaredNorm(), spec.scale_by_fit);
-      if (!j0.allFinite() || u0.rank_deficient) break;
-      // The Gauss-Newton step, kept inside the bounds, in units of the covariance (Mahalanobis).
-      const VectorX step = j0.colPivHouseholderQr().solve(-r0);
-      const VectorX moved = (theta + step).cwiseMax(bounds.lower).cwiseMin(bounds.upper) - theta;
-      const double change = (r0.squaredNorm() - (r0 + j0 * moved).squaredNorm()) / u0.s2;
-      const double step_in_sd = std::sqrt(std::max(change, 0.0));
-      log << "identify: minimum " << s + 1 << "/" << starts.size() << ", Gauss-Newton iteration " << iteration + 1
-          << ": chi2 " << format_number(r0.squaredNorm()) << ", step " << format_number(step_in_sd) << " sd\n";
-      if (step_in_sd <= kAccept) {
-        accepted = true;
-        result.theta = theta;
-        result.residuals = r0;
-        result.jacobian = j0;
-        result.chi2 = r0.squaredNorm();
-        result.converged = true;
-        result.at_bound = fit::at_bounds(theta, bounds);
-      } else {
-        theta += moved;
-      }
-    }
-    if (!accepted) {
-      fit::FitOptions exact;
-      exact.steps = steps;
-      exact.max_iterations = 8;
-      exact.function_tolerance = 1e-8;
-      exact.parameter_tolerance = 1e-7;
-      log << "identify: minimum " << s + 1 << "/" << starts.size() << ": Levenberg-Marquardt on the forward model\n";
-      result = fit::fit_bounded(on_model, smooth_estimates[s], bounds, exact);
-      ++forward_fits;
-    }
-    Fitted f;
-    f.theta = result.theta;
-    f.chi2 = result.chi2;
-    f.residuals = result.residuals;
-    f.model = result.residuals.cwiseProduct(weights) + values;
-    f.at_bound = result.at_bound;
-    f.converged = result.converged;
-    f.uncertainty = fit::uncertainty(result.jacobian, result.theta, result.chi2, spec.scale_by_fit);
-    fitted.push_back(f);
-  }
-  std::sort(fitted.begin(), fitted.end(), [](const Fitted& a, const Fitted& b) { return a.chi2 < b.chi2; });
-  // Starts that converged to the same point are one minimum.
-  std::vector<Fitted> distinct;
-  for (const Fitted& f : fitted) {
-    bool same = false;
-    for (const Fitted& d : distinct)
-      same = same || ((f.theta - d.theta).cwiseQuotient(bounds.upper - bounds.lower).cwiseAbs().maxCoeff() < 1e-3);
-    if (!same) distinct.push_back(f);
-  }
-  const Fitted& best = distinct.front();
+  local_fits(forward, on_spline, starts, bounds, dir, log, figures);
 
   // ---- 4. the 2D profile of the misfit for each pair of unknowns: the least over the others on the
   // map's interpolant, from each slice's least map point (with two unknowns, the map itself)
-  std::vector<fit::Profile> profiles;
   if (k >= 2) {
     fit::FitOptions smooth;
     smooth.steps = VectorX::Constant(static_cast<Eigen::Index>(k), 1e-6);
     const auto profiles_start = std::chrono::steady_clock::now();
     for (std::size_t i = 0; i < k; ++i)
-      for (std::size_t j = i + 1; j < k; ++j) profiles.push_back(fit::profile(on_spline, axes, map_chi2, bounds, i, j, smooth));
+      for (std::size_t j = i + 1; j < k; ++j)
+        figures.profiles.push_back(fit::profile(on_spline, figures.axes, figures.map_chi2, bounds, i, j, smooth));
     if (k > 2)
-      log << "identify: the misfit's profiles over " << profiles.size() << " pairs of unknowns on the interpolant in "
+      log << "identify: the misfit's profiles over " << figures.profiles.size() << " pairs of unknowns on the interpolant in "
           << format_number(std::chrono::duration<double>(std::chrono::steady_clock::now() - profiles_start).count())
           << " s\n";
   }
 
-  // ---- flags
-  std::vector<std::string> reasons;
-  if (n < k) reasons.push_back(std::to_string(n) + " measurements for " + std::to_string(k) + " unknowns");
-  if (best.uncertainty.rank_deficient)
-    reasons.push_back("the Jacobian has rank " + std::to_string(best.uncertainty.rank) + " < " + std::to_string(k) +
-                      ": some combination of the unknowns does not change the measured quantities");
-  for (std::size_t j = 0; j < k; ++j)
-    if (best.at_bound[j]) reasons.push_back(spec.unknowns[j].key + " is at a bound: its interval is not reliable");
-  for (std::size_t d = 1; d < distinct.size(); ++d)
-    if (distinct[d].chi2 - best.chi2 < kEqualFit)
-      reasons.push_back("several minima fit equally well (chi2 " + format_number(best.chi2) + " and " +
-                        format_number(distinct[d].chi2) + "): see minima");
+  // ---- flags and outputs
+  figures.reasons = identifiability(spec, figures.minima);
   std::vector<std::string> notes;
   for (std::size_t i = 0; i < n; ++i)
-    if (!error_verified[i])
-      notes.push_back("the model error of " + measurement_label(spec.measured[i]) +
-                        " is not verified (the orders do not converge monotonically, or a level has no value): 3x a change of two levels is used (0 if only the run's level has a value)");
-
-  // ---- outputs
-  json document;
-  document["estimate"] = keyed(spec, best.theta);
-  document["interval_95"] = intervals_json(spec, best.uncertainty);
-  document["sd"] = keyed(spec, best.uncertainty.sd);
-  document["covariance"] = matrix_json(best.uncertainty.covariance);
-  document["correlation"] = matrix_json(best.uncertainty.correlation);
-  document["unknowns"] = json::array();
-  for (const Unknown& u : spec.unknowns) document["unknowns"].push_back({{"key", u.key}, {"bounds", {u.lower, u.upper}}});
-  document["minima"] = json::array();
-  for (const Fitted& f : distinct) {
-    json at_bound = json::object();
-    for (std::size_t j = 0; j < k; ++j) at_bound[spec.unknowns[j].key] = static_cast<bool>(f.at_bound[j]);
-    document["minima"].push_back({{"estimate", keyed(spec, f.theta)}, {"misfit", f.chi2},
-                                  {"interval_95", intervals_json(spec, f.uncertainty)}, {"at_bound", at_bound},
-                                  {"converged", f.converged}});
-  }
-  document["identifiable"] = reasons.empty();
-  document["reasons"] = reasons;
-  document["residuals"] = json::array();
-  for (std::size_t i = 0; i < n; ++i) {
-    const Measurement& m = spec.measured[i];
-    const Eigen::Index ii = static_cast<Eigen::Index>(i);
-    json row = {{"quantity", m.quantity}, {"value", m.value}, {"sigma", m.sigma},
-                {"model", std::isfinite(best.model[ii]) ? json(best.model[ii]) : json(nullptr)},
-                {"model_error", model_error[ii] * std::abs(values[ii])},
-                {"model_error_verified", static_cast<bool>(error_verified[i])},
-                {"normalised", best.residuals[ii]}};
-    if (m.mode > 0) row["mode"] = m.mode;
-    if (!m.probe.empty()) row["probe"] = m.probe;
-    if (m.drive_hz > 0) row["drive_hz"] = m.drive_hz;
-    document["residuals"].push_back(row);
-  }
-  document["chi2"] = best.chi2;
-  document["dof"] = static_cast<int>(n) - static_cast<int>(k);
-  document["sigma"] = spec.scale_by_fit ? "scaled" : "trusted";
-  document["t_quantile"] = best.uncertainty.t;
-  document["reference_crack"] = {{"at", std::stod(base["crack"]["reference"]["at"].Scalar())}};
-  document["map"] = {{"points_per_unknown", spec.map_points}, {"runs", map_runs}, {"folder", map_dir.string()},
-                     {"best_chi2", best_map}, {"minima_kept", starts.size()}};
-  if (!spec.truth.empty()) {
-    // A synthetic test: the error against the truth, and the Cramer-Rao bound there (the
-    // Gauss-Newton covariance with the sigmas trusted, DETECTION.md sec. 2) from one batch of runs.
-    const VectorX truth = Eigen::Map<const VectorX>(spec.truth.data(), static_cast<Eigen::Index>(k));
-    std::vector<VectorX> points = {truth};
-    for (const VectorX& point : fit::jacobian_points(truth, bounds, steps)) points.push_back(point);
-    const std::vector<VectorX> models = forward.models(points, map_dir / "truth", false);
-    MatrixX jacobian(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(k));
-    for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(k); ++j)
-      jacobian.col(j) = (models[static_cast<std::size_t>(j) + 1] - models[0]).cwiseQuotient(weights) /
-                        (points[static_cast<std::size_t>(j) + 1][j] - truth[j]);
-    const fit::Uncertainty bound = fit::uncertainty(jacobian, truth, 0.0, false);
-    // The same with the measurement noise alone (no model error in the weights): the scatter that
-    // noise alone would give an unbiased estimator.
-    const MatrixX noise_jacobian = weights.cwiseQuotient(sigma).asDiagonal() * jacobian;
-    const fit::Uncertainty noise_bound = fit::uncertainty(noise_jacobian, truth, 0.0, false);
-    json inside = json::object(), error = json::object(), in_bound = json::object();
-    for (std::size_t j = 0; j < k; ++j) {
-      const Eigen::Index jj = static_cast<Eigen::Index>(j);
-      const auto& interval = best.uncertainty.interval_95[j];
-      inside[spec.unknowns[j].key] = interval[0] <= truth[jj] && truth[jj] <= interval[1];
-      error[spec.unknowns[j].key] = best.theta[jj] - truth[jj];
-      in_bound[spec.unknowns[j].key] = (best.theta[jj] - truth[jj]) / bound.sd[jj];
-    }
-    document["truth"] = {{"value", keyed(spec, truth)}, {"error", error}, {"inside_95", inside},
-                         {"cramer_rao_sd", keyed(spec, bound.sd)}, {"error_in_cramer_rao_sd", in_bound},
-                         {"cramer_rao_noise_sd", keyed(spec, noise_bound.sd)},
-                         {"chi2_at_truth", ((models[0] - values).cwiseQuotient(weights)).squaredNorm()}};
-  }
-  document["profiles"] = json::array();
-  for (const fit::Profile& p : profiles) {
-    json rows = json::array();
-    for (std::size_t a = 0; a < axes[p.first].size(); ++a) {
-      json row = json::array();
-      for (std::size_t b = 0; b < axes[p.second].size(); ++b) {
-        const double value = p.chi2[a * axes[p.second].size() + b];
-        row.push_back(std::isfinite(value) ? json(value) : json(nullptr));
-      }
-      rows.push_back(row);
-    }
-    document["profiles"].push_back({{"unknowns", {spec.unknowns[p.first].key, spec.unknowns[p.second].key}},
-                                    {"axes", {axes[p.first], axes[p.second]}},
-                                    {"chi2", rows},
-                                    {"method", k == 2 ? "the map" : "least over the other unknowns on the map's interpolant"}});
-  }
-  document["local_fits"] = {{"gauss_newton_iterations", gauss_newton}, {"levenberg_marquardt", forward_fits}};
+    if (!figures.error_verified[i])
+      notes.push_back("the model error of " + detail::measurement_label(spec.measured[i]) +
+                      " is not verified (the orders do not converge monotonically, or a level has no value): 3x a change of two levels is used (0 if only the run's level has a value)");
+  json document = detail::identify_json(figures);
+  if (!spec.truth.empty()) document["truth"] = truth_json(forward, figures, bounds);
   document["forward_runs"] = forward.runs();
   document["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-
-  // identify_map.csv: the map as a table (unknowns, chi^2 with the final weights).
-  std::ostringstream csv;
-  for (std::size_t j = 0; j < k; ++j) csv << study::key_header(spec.unknowns[j].path) + (spec.unknowns[j].index >= 0 ? "[" + std::to_string(spec.unknowns[j].index) + "]" : "") << ",";
-  csv << "chi2 [-]\n";
-  for (std::size_t flat = 0; flat < total; ++flat) {
-    for (std::size_t j = 0; j < k; ++j) csv << format_number(grid[flat][static_cast<Eigen::Index>(j)]) << ",";
-    csv << (std::isfinite(map_chi2[flat]) ? format_number(map_chi2[flat]) : "") << "\n";
-  }
-  io::write_file_atomic(dir / "identify_map.csv", csv.str());
-  // identify_profiles.csv: every pair's profile as one long table (unknown_x, unknown_y name the pair).
-  if (!profiles.empty()) {
-    std::ostringstream table;
-    table << "unknown_x,unknown_y,x,y,chi2 [-]\n";
-    for (const fit::Profile& p : profiles)
-      for (std::size_t a = 0; a < axes[p.first].size(); ++a)
-        for (std::size_t b = 0; b < axes[p.second].size(); ++b) {
-          const double value = p.chi2[a * axes[p.second].size() + b];
-          table << spec.unknowns[p.first].key << "," << spec.unknowns[p.second].key << "," << format_number(axes[p.first][a])
-                << "," << format_number(axes[p.second][b]) << "," << (std::isfinite(value) ? format_number(value) : "") << "\n";
-        }
-    io::write_file_atomic(dir / "identify_profiles.csv", table.str());
-  }
-  const std::vector<double>& shown = k > 2 ? profiles.front().chi2 : map_chi2;
-  if (std::string note = plot_map(dir, spec, axes, shown, distinct, best); !note.empty()) notes.push_back(note);
-  if (k > 2)
-    if (std::string note = plot_profiles(dir, spec, axes, profiles, best); !note.empty()) notes.push_back(note);
-  if (std::string note = plot_fit(dir, spec, best, weights); !note.empty()) notes.push_back(note);
+  detail::write_identify_tables(dir, figures);
+  detail::draw_identify_plots(dir, figures, notes);
   document["notes"] = notes;
   io::write_json(dir / "identify.json", document);
-
-  for (std::size_t j = 0; j < k; ++j) {
-    const auto& interval = best.uncertainty.interval_95[j];
-    log << "  " << spec.unknowns[j].key << " = " << format_number(best.theta[static_cast<Eigen::Index>(j)])
-        << "  95 %: [" << format_number(interval[0]) << ", " << format_number(interval[1]) << "]\n";
-  }
-  log << "  chi2 = " << format_number(best.chi2) << " (" << n << " measurements, " << k << " unknowns), "
-      << forward.runs() << " forward runs, " << (document["identifiable"].get<bool>() ? "identifiable" : "NOT identifiable")
-      << "\n";
-  for (const std::string& reason : reasons) log << "  not identifiable: " << reason << "\n";
-  for (const std::string& note : notes) log << "  note: " << note << "\n";
+  detail::print_identify_summary(log, figures, forward.runs(), notes);
   return document;
 }
 
