@@ -135,42 +135,47 @@ nlohmann::json modal_accuracy_not_estimated(const std::string& reason) {
   return {{"estimated", false}, {"reason", reason}};
 }
 
-ModalAccuracy modal_accuracy(const ModalLevelPlan& plan, const std::vector<ModalLevel>& levels, double estimate_s,
-                             double wall_s) {
-  // The levels by order, in the plan's order (a missing one: every value NaN).
-  std::vector<const ModalLevel*> at;
-  const ModalLevel* run = nullptr;
-  const auto check_found = std::find_if(levels.begin(), levels.end(), [](const ModalLevel& l) { return l.check; });
-  const ModalLevel* check = check_found == levels.end() ? nullptr : &*check_found;
-  const std::string check_name =
-      plan.check_cells ? "order " + std::to_string(kCheckOrder) + " on cells " + nlohmann::json(*plan.check_cells).dump()
-                       : std::string();
-  for (int order : plan.orders) {
-    const auto found = std::find_if(levels.begin(), levels.end(),
-                                    [&](const ModalLevel& l) { return l.order == order && !l.check; });
-    at.push_back(found == levels.end() ? nullptr : &*found);
-    if (order == plan.run_order) run = at.back();
-  }
-  if (!run) return {modal_accuracy_not_estimated("the solve at the scene's order is missing"), {}};
+namespace {
 
-  ModalAccuracy out;
-  SettingSummary summary;
-  auto estimate_of = [&](const std::string& quantity, const std::function<double(const ModalLevel&)>& value_at) {
+/// The estimates of one plan's levels: the mesh component of a quantity from its values at the
+/// plan's orders (a missing level: NaN), checked against the check level where there is one; every
+/// estimate joins `summary`.
+class LevelEstimates {
+ public:
+  LevelEstimates(const ModalLevelPlan& plan, const std::vector<const ModalLevel*>& at, const ModalLevel& run,
+                 const ModalLevel* check)
+      : plan_(plan), at_(at), run_(run), check_(check) {
+    if (plan.check_cells)
+      check_name_ = "order " + std::to_string(kCheckOrder) + " on cells " + nlohmann::json(*plan.check_cells).dump();
+  }
+
+  accuracy::Estimate operator()(const std::string& quantity, const std::function<double(const ModalLevel&)>& value_at) {
     std::vector<double> values, dofs;
-    for (const ModalLevel* level : at) {
+    for (const ModalLevel* level : at_) {
       values.push_back(level ? value_at(*level) : kNaN);
       dofs.push_back(level ? static_cast<double>(level->dofs) : kNaN);
     }
-    const double value = value_at(*run);
-    accuracy::Component mesh = frequency_mesh_component(plan.orders, values, dofs, plan.run_order);
-    if (check) mesh = accuracy::checked_against(mesh, check_name, value_at(*check));
-    accuracy::Estimate estimate = accuracy::combine(quantity, value, {mesh});
+    accuracy::Component mesh = frequency_mesh_component(plan_.orders, values, dofs, plan_.run_order);
+    if (check_) mesh = accuracy::checked_against(mesh, check_name_, value_at(*check_));
+    accuracy::Estimate estimate = accuracy::combine(quantity, value_at(run_), {mesh});
     add_to_summary(estimate, summary);
     return estimate;
-  };
+  }
 
+  SettingSummary summary;
+
+ private:
+  const ModalLevelPlan& plan_;
+  const std::vector<const ModalLevel*>& at_;
+  const ModalLevel& run_;
+  const ModalLevel* check_;
+  std::string check_name_;
+};
+
+/// modal.json accuracy `variants`: each variant's frequencies with their estimates.
+nlohmann::json variants_json(const ModalLevel& run, LevelEstimates& estimate_of) {
   nlohmann::json variants = nlohmann::json::object();
-  for (const auto& [name, frequencies] : run->variants) {
+  for (const auto& [name, frequencies] : run.variants) {
     nlohmann::json list = nlohmann::json::array();
     for (std::size_t i = 0; i < frequencies.size(); ++i) {
       list.push_back(output::estimate_json(estimate_of("f_" + name + " " + std::to_string(i + 1), [&](const ModalLevel& l) {
@@ -180,10 +185,15 @@ ModalAccuracy modal_accuracy(const ModalLevelPlan& plan, const std::vector<Modal
     }
     variants[name] = {{"frequencies_hz", list}};
   }
+  return variants;
+}
 
+/// modal.json accuracy `pairs`: each mode pair's three frequencies and ratio with their estimates;
+/// the terminal lines in `lines`.
+nlohmann::json pairs_json(const ModalLevel& run, LevelEstimates& estimate_of, std::vector<std::string>& lines) {
   nlohmann::json pairs = nlohmann::json::array();
-  for (std::size_t i = 0; i < run->pairs.size(); ++i) {
-    const modal::ModePair& pair = run->pairs[i];
+  for (std::size_t i = 0; i < run.pairs.size(); ++i) {
+    const modal::ModePair& pair = run.pairs[i];
     // A level whose mode i pairs with another open mode (or none) lacks the open frequency's partner.
     auto same_pair = [&](const ModalLevel& l) {
       return i < l.pairs.size() && l.pairs[i].paired == pair.paired && l.pairs[i].open_mode == pair.open_mode;
@@ -203,9 +213,33 @@ ModalAccuracy modal_accuracy(const ModalLevelPlan& plan, const std::vector<Modal
                      {"f_open_hz", output::estimate_json(f_o)},
                      {"f_bilinear_hz", output::estimate_json(f_b)},
                      {"ratio", output::estimate_json(ratio)}});
-    out.lines.push_back("accuracy mode" + mode + ": " + short_line({{"f_uncracked", &f_u}, {"f_open", &f_o},
-                                                                    {"f_bilinear", &f_b}}));
+    lines.push_back("accuracy mode" + mode + ": " + short_line({{"f_uncracked", &f_u}, {"f_open", &f_o},
+                                                                {"f_bilinear", &f_b}}));
   }
+  return pairs;
+}
+
+}  // namespace
+
+ModalAccuracy modal_accuracy(const ModalLevelPlan& plan, const std::vector<ModalLevel>& levels, double estimate_s,
+                             double wall_s) {
+  // The levels by order, in the plan's order (a missing one: every value NaN).
+  std::vector<const ModalLevel*> at;
+  const ModalLevel* run = nullptr;
+  const auto check_found = std::find_if(levels.begin(), levels.end(), [](const ModalLevel& l) { return l.check; });
+  const ModalLevel* check = check_found == levels.end() ? nullptr : &*check_found;
+  for (int order : plan.orders) {
+    const auto found = std::find_if(levels.begin(), levels.end(),
+                                    [&](const ModalLevel& l) { return l.order == order && !l.check; });
+    at.push_back(found == levels.end() ? nullptr : &*found);
+    if (order == plan.run_order) run = at.back();
+  }
+  if (!run) return {modal_accuracy_not_estimated("the solve at the scene's order is missing"), {}};
+
+  ModalAccuracy out;
+  LevelEstimates estimate_of(plan, at, *run, check);
+  const nlohmann::json variants = variants_json(*run, estimate_of);
+  const nlohmann::json pairs = pairs_json(*run, estimate_of, out.lines);
   if (run->pairs.empty()) {
     for (const auto& [name, list] : variants.items()) {
       for (std::size_t i = 0; i < list["frequencies_hz"].size(); ++i) {
@@ -216,7 +250,7 @@ ModalAccuracy modal_accuracy(const ModalLevelPlan& plan, const std::vector<Modal
       }
     }
   }
-
+  const SettingSummary& summary = estimate_of.summary;
   ToleranceOutcome outcome;
   if (plan.tolerance) {
     outcome.met = summary.verified && summary.worst <= *plan.tolerance;

@@ -65,6 +65,107 @@ std::vector<Vec3> points_of(const YAML::Node& node, const std::string& file, con
   return points;
 }
 
+/// The sensor points on the face `spec.face` every `spacing` (both ends included, at least 2 per axis).
+void face_grid(PlanSpec& spec, const YAML::Node& spacing_node, double spacing, const std::string& file, const Vec3& origin,
+               const Vec3& size) {
+  const int normal = spec.face[0] - 'x';
+  const int a = (normal + 1) % 3, b = (normal + 2) % 3;
+  const int first = std::min(a, b), second = std::max(a, b);
+  const double at = origin[normal] + (spec.face[1] == '+' ? size[normal] : 0.0);
+  spec.grid[0] = std::max(2, static_cast<int>(std::lround(size[first] / spacing)) + 1);
+  spec.grid[1] = std::max(2, static_cast<int>(std::lround(size[second] / spacing)) + 1);
+  if (spec.grid[0] * spec.grid[1] > 2000)
+    fail(file, scene::mark_line(spacing_node), "plan.sensors.spacing", "at most 2000 sensor points on the face",
+         std::to_string(spec.grid[0] * spec.grid[1]));
+  for (int i = 0; i < spec.grid[0]; ++i)
+    for (int j = 0; j < spec.grid[1]; ++j) {
+      Vec3 x;
+      x[normal] = at;
+      x[first] = origin[first] + size[first] * i / (spec.grid[0] - 1);
+      x[second] = origin[second] + size[second] * j / (spec.grid[1] - 1);
+      spec.sensors.push_back(x);
+    }
+}
+
+/// plan.sensors: a face sampled on a grid, or a list of points; the analysed component.
+void parse_sensors(const YAML::Node& section, const scene::Param& table, const std::string& file, const Vec3& origin,
+                   const Vec3& size, PlanSpec& spec) {
+  const YAML::Node sensors = section["sensors"];
+  if (!sensors || !sensors.IsMap())
+    fail(file, sensors ? scene::mark_line(sensors) : spec.line, "plan.sensors",
+         "a map {face: z+, spacing: 0.01} or {points: [[x, y, z], ...]}", sensors ? scene::describe_node(sensors) : "nothing");
+  only_keys(sensors, keys_of(*table.child("sensors")), file, "plan.sensors");
+  if (const YAML::Node component = sensors["component"]) {
+    const std::string axis = component.Scalar();
+    if (axis != "x" && axis != "y" && axis != "z")
+      fail(file, scene::mark_line(component), "plan.sensors.component", "one of x, y, z", "'" + axis + "'");
+    spec.component = axis[0] - 'x';
+  }
+  if (sensors["face"] && sensors["points"])
+    fail(file, scene::mark_line(sensors), "plan.sensors", "either face (with spacing) or points", "both");
+  if (sensors["points"]) {
+    spec.sensors = points_of(sensors["points"], file, "plan.sensors.points");
+    if (sensors["spacing"]) fail(file, scene::mark_line(sensors["spacing"]), "plan.sensors.spacing", "spacing with face only", "points");
+  } else if (sensors["face"]) {
+    spec.face = sensors["face"].Scalar();
+    if (std::find(kFaces.begin(), kFaces.end(), spec.face) == kFaces.end())
+      fail(file, scene::mark_line(sensors["face"]), "plan.sensors.face", "one of " + join(kFaces),
+           "'" + spec.face + "'" + scene::suggestion(spec.face, kFaces));
+    if (!sensors["spacing"]) fail(file, scene::mark_line(sensors), "plan.sensors.spacing", "the spacing of the sensor grid [m]", "nothing");
+    const double spacing = number_of(sensors["spacing"], file, "plan.sensors.spacing");
+    if (!(spacing > 0.0)) fail(file, scene::mark_line(sensors["spacing"]), "plan.sensors.spacing", "a spacing > 0 [m]", format_number(spacing));
+    face_grid(spec, sensors["spacing"], spacing, file, origin, size);
+  } else {
+    fail(file, scene::mark_line(sensors), "plan.sensors", "face (with spacing) or points", "neither");
+  }
+}
+
+/// plan.drives: the drive points and frequencies (multiples of a mode's bilinear frequency).
+void parse_drives(const YAML::Node& section, const scene::Param& table, const std::string& file, PlanSpec& spec) {
+  const YAML::Node drives = section["drives"];
+  if (!drives || !drives.IsMap())
+    fail(file, drives ? scene::mark_line(drives) : spec.line, "plan.drives", "a map {points: [[x, y, z], ...], frequencies: [{mode, ratio}, ...]}",
+         drives ? scene::describe_node(drives) : "nothing");
+  only_keys(drives, keys_of(*table.child("drives")), file, "plan.drives");
+  if (!drives["points"]) fail(file, scene::mark_line(drives), "plan.drives.points", "a list of drive points [[x, y, z], ...]", "nothing");
+  spec.drive_points = points_of(drives["points"], file, "plan.drives.points");
+  const YAML::Node frequencies = drives["frequencies"];
+  if (!frequencies || !frequencies.IsSequence() || frequencies.size() == 0)
+    fail(file, frequencies ? scene::mark_line(frequencies) : scene::mark_line(drives), "plan.drives.frequencies",
+         "a list [{mode: 1, ratio: 0.5}, ...]", frequencies ? scene::describe_node(frequencies) : "nothing");
+  for (std::size_t i = 0; i < frequencies.size(); ++i) {
+    const std::string where = "plan.drives.frequencies[" + std::to_string(i) + "]";
+    const YAML::Node f = frequencies[i];
+    if (!f.IsMap()) fail(file, scene::mark_line(f), where, "a map {mode, ratio}", scene::describe_node(f));
+    only_keys(f, keys_of(*table.child("drives")->child("frequencies")), file, where);
+    DriveFrequency drive;
+    if (!f["mode"]) fail(file, scene::mark_line(f), where + ".mode", "an uncracked mode number >= 1", "nothing");
+    drive.mode = static_cast<int>(number_of(f["mode"], file, where + ".mode", true));
+    if (drive.mode < 1) fail(file, scene::mark_line(f["mode"]), where + ".mode", "an uncracked mode number >= 1", std::to_string(drive.mode));
+    if (!f["ratio"]) fail(file, scene::mark_line(f), where + ".ratio", "a multiple of the mode's bilinear frequency", "nothing");
+    drive.ratio = number_of(f["ratio"], file, where + ".ratio");
+    if (!(drive.ratio > 0.0) || drive.ratio > 10.0)
+      fail(file, scene::mark_line(f["ratio"]), where + ".ratio", "a ratio in (0, 10]", format_number(drive.ratio));
+    spec.frequencies.push_back(drive);
+  }
+}
+
+/// plan.noise: relative sigmas of a measured frequency and ratio, and the noise floor.
+void parse_noise(const YAML::Node& section, const scene::Param& table, const std::string& file, PlanSpec& spec) {
+  if (const YAML::Node noise = section["noise"]) {
+    if (!noise.IsMap()) fail(file, scene::mark_line(noise), "plan.noise", "a map {frequency, ratio, floor}", scene::describe_node(noise));
+    only_keys(noise, keys_of(*table.child("noise")), file, "plan.noise");
+    const auto positive = [&](const char* key, double& target) {
+      if (!noise[key]) return;
+      target = number_of(noise[key], file, std::string("plan.noise.") + key);
+      if (!(target > 0.0)) fail(file, scene::mark_line(noise[key]), std::string("plan.noise.") + key, "a relative sigma > 0", format_number(target));
+    };
+    positive("frequency", spec.noise_frequency);
+    positive("ratio", spec.noise_ratio);
+    positive("floor", spec.noise_floor);
+  }
+}
+
 }  // namespace
 
 double log_det(const MatrixX& fisher) {
@@ -142,91 +243,9 @@ PlanSpec parse_plan_section(const std::string& text, const std::string& file, co
     if (value < 1 || value > 5) fail(file, scene::mark_line(combine), "plan.combine", "an integer in 1..5", format_number(value));
     spec.combine = static_cast<int>(value);
   }
-  // sensors
-  const YAML::Node sensors = section["sensors"];
-  if (!sensors || !sensors.IsMap())
-    fail(file, sensors ? scene::mark_line(sensors) : spec.line, "plan.sensors",
-         "a map {face: z+, spacing: 0.01} or {points: [[x, y, z], ...]}", sensors ? scene::describe_node(sensors) : "nothing");
-  only_keys(sensors, keys_of(*table.child("sensors")), file, "plan.sensors");
-  if (const YAML::Node component = sensors["component"]) {
-    const std::string axis = component.Scalar();
-    if (axis != "x" && axis != "y" && axis != "z")
-      fail(file, scene::mark_line(component), "plan.sensors.component", "one of x, y, z", "'" + axis + "'");
-    spec.component = axis[0] - 'x';
-  }
-  if (sensors["face"] && sensors["points"])
-    fail(file, scene::mark_line(sensors), "plan.sensors", "either face (with spacing) or points", "both");
-  if (sensors["points"]) {
-    spec.sensors = points_of(sensors["points"], file, "plan.sensors.points");
-    if (sensors["spacing"]) fail(file, scene::mark_line(sensors["spacing"]), "plan.sensors.spacing", "spacing with face only", "points");
-  } else if (sensors["face"]) {
-    spec.face = sensors["face"].Scalar();
-    if (std::find(kFaces.begin(), kFaces.end(), spec.face) == kFaces.end())
-      fail(file, scene::mark_line(sensors["face"]), "plan.sensors.face", "one of " + join(kFaces),
-           "'" + spec.face + "'" + scene::suggestion(spec.face, kFaces));
-    if (!sensors["spacing"]) fail(file, scene::mark_line(sensors), "plan.sensors.spacing", "the spacing of the sensor grid [m]", "nothing");
-    const double spacing = number_of(sensors["spacing"], file, "plan.sensors.spacing");
-    if (!(spacing > 0.0)) fail(file, scene::mark_line(sensors["spacing"]), "plan.sensors.spacing", "a spacing > 0 [m]", format_number(spacing));
-    const int normal = spec.face[0] - 'x';
-    const int a = (normal + 1) % 3, b = (normal + 2) % 3;
-    const int first = std::min(a, b), second = std::max(a, b);
-    const double at = origin[normal] + (spec.face[1] == '+' ? size[normal] : 0.0);
-    spec.grid[0] = std::max(2, static_cast<int>(std::lround(size[first] / spacing)) + 1);
-    spec.grid[1] = std::max(2, static_cast<int>(std::lround(size[second] / spacing)) + 1);
-    if (spec.grid[0] * spec.grid[1] > 2000)
-      fail(file, scene::mark_line(sensors["spacing"]), "plan.sensors.spacing", "at most 2000 sensor points on the face",
-           std::to_string(spec.grid[0] * spec.grid[1]));
-    for (int i = 0; i < spec.grid[0]; ++i)
-      for (int j = 0; j < spec.grid[1]; ++j) {
-        Vec3 x;
-        x[normal] = at;
-        x[first] = origin[first] + size[first] * i / (spec.grid[0] - 1);
-        x[second] = origin[second] + size[second] * j / (spec.grid[1] - 1);
-        spec.sensors.push_back(x);
-      }
-  } else {
-    fail(file, scene::mark_line(sensors), "plan.sensors", "face (with spacing) or points", "neither");
-  }
-  // drives
-  const YAML::Node drives = section["drives"];
-  if (!drives || !drives.IsMap())
-    fail(file, drives ? scene::mark_line(drives) : spec.line, "plan.drives", "a map {points: [[x, y, z], ...], frequencies: [{mode, ratio}, ...]}",
-         drives ? scene::describe_node(drives) : "nothing");
-  only_keys(drives, keys_of(*table.child("drives")), file, "plan.drives");
-  if (!drives["points"]) fail(file, scene::mark_line(drives), "plan.drives.points", "a list of drive points [[x, y, z], ...]", "nothing");
-  spec.drive_points = points_of(drives["points"], file, "plan.drives.points");
-  const YAML::Node frequencies = drives["frequencies"];
-  if (!frequencies || !frequencies.IsSequence() || frequencies.size() == 0)
-    fail(file, frequencies ? scene::mark_line(frequencies) : scene::mark_line(drives), "plan.drives.frequencies",
-         "a list [{mode: 1, ratio: 0.5}, ...]", frequencies ? scene::describe_node(frequencies) : "nothing");
-  for (std::size_t i = 0; i < frequencies.size(); ++i) {
-    const std::string where = "plan.drives.frequencies[" + std::to_string(i) + "]";
-    const YAML::Node f = frequencies[i];
-    if (!f.IsMap()) fail(file, scene::mark_line(f), where, "a map {mode, ratio}", scene::describe_node(f));
-    only_keys(f, keys_of(*table.child("drives")->child("frequencies")), file, where);
-    DriveFrequency drive;
-    if (!f["mode"]) fail(file, scene::mark_line(f), where + ".mode", "an uncracked mode number >= 1", "nothing");
-    drive.mode = static_cast<int>(number_of(f["mode"], file, where + ".mode", true));
-    if (drive.mode < 1) fail(file, scene::mark_line(f["mode"]), where + ".mode", "an uncracked mode number >= 1", std::to_string(drive.mode));
-    if (!f["ratio"]) fail(file, scene::mark_line(f), where + ".ratio", "a multiple of the mode's bilinear frequency", "nothing");
-    drive.ratio = number_of(f["ratio"], file, where + ".ratio");
-    if (!(drive.ratio > 0.0) || drive.ratio > 10.0)
-      fail(file, scene::mark_line(f["ratio"]), where + ".ratio", "a ratio in (0, 10]", format_number(drive.ratio));
-    spec.frequencies.push_back(drive);
-  }
-  // noise
-  if (const YAML::Node noise = section["noise"]) {
-    if (!noise.IsMap()) fail(file, scene::mark_line(noise), "plan.noise", "a map {frequency, ratio, floor}", scene::describe_node(noise));
-    only_keys(noise, keys_of(*table.child("noise")), file, "plan.noise");
-    const auto positive = [&](const char* key, double& target) {
-      if (!noise[key]) return;
-      target = number_of(noise[key], file, std::string("plan.noise.") + key);
-      if (!(target > 0.0)) fail(file, scene::mark_line(noise[key]), std::string("plan.noise.") + key, "a relative sigma > 0", format_number(target));
-    };
-    positive("frequency", spec.noise_frequency);
-    positive("ratio", spec.noise_ratio);
-    positive("floor", spec.noise_floor);
-  }
+  parse_sensors(section, table, file, origin, size, spec);
+  parse_drives(section, table, file, spec);
+  parse_noise(section, table, file, spec);
   return spec;
 }
 
