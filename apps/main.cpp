@@ -15,6 +15,8 @@
 #include <new>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "pipeline/commands.hpp"
 #include "pipeline/sweep.hpp"
 #include "pipeline/limits.hpp"

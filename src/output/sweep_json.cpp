@@ -5,6 +5,8 @@
 #include <cmath>
 #include <functional>
 
+#include <nlohmann/json.hpp>
+
 namespace crackle::output {
 namespace {
 

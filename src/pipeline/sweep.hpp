@@ -17,7 +17,6 @@
 #include <utility>
 #include <vector>
 
-#include <nlohmann/json.hpp>
 
 #include "io/csv.hpp"
 #include "output/sweep_json.hpp"

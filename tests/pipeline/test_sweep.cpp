@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include <Eigen/Eigenvalues>
+#include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
 #include "io/csv.hpp"
