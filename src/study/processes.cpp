@@ -105,15 +105,19 @@ ExitStatus wait_process(const ChildProcess& child) {
 
 std::vector<std::string> child_environment(int threads) {
   std::vector<std::string> environment;
-  bool has_threads = false;
+  bool has_threads = false, has_blas_threads = false;
   for (char** entry = environ; entry && *entry; ++entry) {
     const std::string variable = *entry;
     const auto starts = [&](const char* prefix) { return variable.rfind(prefix, 0) == 0; };
     if (starts("OMPI_") || starts("PMIX_") || starts("PMI_")) continue;
     if (starts("OMP_NUM_THREADS=")) has_threads = true;
+    if (starts("OPENBLAS_NUM_THREADS=")) has_blas_threads = true;
     environment.push_back(variable);
   }
   if (!has_threads && threads > 0) environment.push_back("OMP_NUM_THREADS=" + std::to_string(threads));
+  // OpenBLAS (the pthreads build) starts a thread per core of its own, whatever OpenMP's count: cases
+  // run side by side would oversubscribe the cores, and its threads wait by spinning.
+  if (!has_blas_threads && threads > 0) environment.push_back("OPENBLAS_NUM_THREADS=" + std::to_string(threads));
   return environment;
 }
 

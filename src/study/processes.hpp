@@ -43,8 +43,8 @@ void signal_process(const ChildProcess& child, int signal);
 ExitStatus wait_process(const ChildProcess& child);
 
 /// The current environment without the variables of an MPI launcher (OMPI_*, PMIX_*, PMI_*), so
-/// that a child started by one rank runs on its own; with OMP_NUM_THREADS set to
-/// `threads` when it is not set already and threads > 0.
+/// that a child started by one rank runs on its own; with OMP_NUM_THREADS and OPENBLAS_NUM_THREADS
+/// each set to `threads` when it is not set already and threads > 0.
 std::vector<std::string> child_environment(int threads);
 
 }  // namespace crackle::study

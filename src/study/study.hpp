@@ -33,7 +33,8 @@ struct StudyOptions {
   bool retry_failed = false;  ///< rerun cases recorded as failed
   bool progress = true;       ///< the progress lines (cases done, running, ETA) on the log
   double case_timeout_s = 0;  ///< stop a case after this long (recorded as failed); 0: no limit
-  /// OMP_NUM_THREADS of the case processes when the environment does not set it; 0: leave unset.
+  /// OMP_NUM_THREADS and OPENBLAS_NUM_THREADS of the case processes where the environment does not
+  /// set them; 0: leave unset.
   int threads_per_case = 1;
   std::string gnuplot = "gnuplot";  ///< for the plots; a missing gnuplot skips them with a note
   int rank = -1;                    ///< this process's rank; -1: from the MPI launcher's environment (else 0)

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -17,6 +18,7 @@
 
 #include "core/errors.hpp"
 #include "scene/scene.hpp"
+#include "study/processes.hpp"
 #include "study/results.hpp"
 #include "study/study.hpp"
 
@@ -434,6 +436,44 @@ TEST(StudyRun, MpiRanksSplitTheCasesAndRankZeroWritesTheTables) {
   EXPECT_EQ(workspace.marks("modal ").size(), 7u);
   ASSERT_EQ(run_quietly(options_for(workspace, "reference", 2)), 0);
   EXPECT_EQ(read(workspace.root / "out/study.csv"), read(workspace.root / "reference/study.csv"));
+}
+
+// A case process gets one OpenMP and one OpenBLAS thread unless the user's environment says
+// otherwise (OpenBLAS's pthreads build would start one per core in each case run side by side), and
+// no MPI launcher variables.
+TEST(StudyRun, CaseProcessesGetTheirThreadCountsUnlessTheEnvironmentSetsThem) {
+  const auto has = [](const std::vector<std::string>& environment, const std::string& entry) {
+    return std::find(environment.begin(), environment.end(), entry) != environment.end();
+  };
+  const auto count = [](const std::vector<std::string>& environment, const std::string& prefix) {
+    return std::count_if(environment.begin(), environment.end(),
+                         [&](const std::string& e) { return e.rfind(prefix, 0) == 0; });
+  };
+  std::map<std::string, std::string> saved;
+  for (const char* name : {"OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "OMPI_COMM_WORLD_SIZE"}) {
+    if (const char* value = std::getenv(name)) saved[name] = value;
+  }
+  ::unsetenv("OMP_NUM_THREADS");
+  ::unsetenv("OPENBLAS_NUM_THREADS");
+  ::setenv("OMPI_COMM_WORLD_SIZE", "2", 1);
+  const std::vector<std::string> unset = crackle::study::child_environment(1);
+  EXPECT_TRUE(has(unset, "OMP_NUM_THREADS=1"));
+  EXPECT_TRUE(has(unset, "OPENBLAS_NUM_THREADS=1"));
+  EXPECT_EQ(count(unset, "OMPI_"), 0);
+  ::setenv("OPENBLAS_NUM_THREADS", "3", 1);
+  ::setenv("OMP_NUM_THREADS", "4", 1);
+  const std::vector<std::string> given = crackle::study::child_environment(1);
+  EXPECT_TRUE(has(given, "OPENBLAS_NUM_THREADS=3"));
+  EXPECT_TRUE(has(given, "OMP_NUM_THREADS=4"));
+  EXPECT_EQ(count(given, "OPENBLAS_NUM_THREADS="), 1);
+  EXPECT_EQ(count(given, "OMP_NUM_THREADS="), 1);
+  const std::vector<std::string> left = crackle::study::child_environment(0);
+  ::unsetenv("OMP_NUM_THREADS");
+  ::unsetenv("OPENBLAS_NUM_THREADS");
+  EXPECT_EQ(count(crackle::study::child_environment(0), "OPENBLAS_NUM_THREADS="), 0);
+  EXPECT_EQ(count(left, "OPENBLAS_NUM_THREADS="), 1);  // the user's, kept
+  ::unsetenv("OMPI_COMM_WORLD_SIZE");
+  for (const auto& [name, value] : saved) ::setenv(name.c_str(), value.c_str(), 1);
 }
 
 TEST(StudyRun, BadOverrideFailsBeforeAnythingRuns) {
