@@ -221,6 +221,19 @@ std::vector<fs::path> run_forward_cases(const YAML::Node& base, const std::vecto
   if (command == "sweep" && transient.IsMap() && (!transient["model"] || transient["model"].Scalar() == "auto")) {
     document["transient"]["model"] = "reduced";
   }
+  // A forward sweep grades its box mesh towards the crack front, as the modal batch does (crackle
+  // modal's default; `grading: auto` leaves crackle sweep's mesh uniform). The ratios converge far
+  // slower on the uniform grid: A2/A1 of data/identify-beam.yaml's middle crack at p = 2, 3, 4 is
+  // 0.0282, 0.0354, 0.0385 uniform against 0.0393, 0.0431, 0.0435 graded (docs/benchmarks.md 13.7).
+  const YAML::Node box = view["mesh"] ? view["mesh"]["box"] : YAML::Node();
+  if (command == "sweep" && box && box.IsMap()) {
+    const YAML::Node grading = box["grading"];
+    if (!grading || (grading.IsScalar() && grading.Scalar() == "auto")) {
+      document["mesh"]["box"]["grading"] = "always";
+    } else if (grading.IsMap() && (!grading["mode"] || grading["mode"].Scalar() == "auto")) {
+      document["mesh"]["box"]["grading"]["mode"] = "always";
+    }
+  }
   // A forward modal case is not estimated by its own lower orders (crackle modal's default at order 3
   // or more): identify's error is its own p-refinement of the map.
   if (command == "modal" && (view["modal"] || view["spectrum"] || view["sweep"])) {

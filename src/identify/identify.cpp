@@ -106,8 +106,8 @@ constexpr double kSweepHalfWidth = 1e-4;
 
 /// The forward model: batches of parameter vectors run as studies of `crackle modal` cases for the
 /// frequencies and, when harmonic quantities are measured, of `crackle sweep` cases (one per drive
-/// frequency: a narrow harmonic-balance sweep about it) for those. Two studies, because the modal
-/// command grades its mesh towards the crack front and the sweep's reduced model does not.
+/// frequency: a narrow harmonic-balance sweep about it) for those. Two studies, one per command; both
+/// grade the mesh towards the crack front (run_forward_cases).
 class Forward {
  public:
   Forward(const IdentifySpec& spec, YAML::Node base, const scene::DampingSection& damping,

@@ -79,7 +79,9 @@ Param build_parameters() {
                          "crackle sweep (the full explicit transient would pay the smallest cell in its stable "
                          "step; the reduced model and the sweep keep its mesh, so that switching "
                          "transient.model changes the cost, not the answer; the modal stage uses the same "
-                         "mesh, so the excitation is that mesh's own resonance); always: graded for every "
+                         "mesh, so the excitation is that mesh's own resonance), graded for the forward sweeps of "
+                         "crackle identify and crackle plan (their ratios on a uniform grid: docs/benchmarks.md "
+                         "section 13.7); always: graded for every "
                          "command (with the reduced model the way to an accurate A2/A1, docs/benchmarks.md "
                          "section 5.1); none: no grading.", {"auto", "always", "none"}).defaults_to("auto"),
           integer("layers", "Geometric layers on each side of the front; auto: p - 1 + round(log2(D/h)) "

@@ -238,10 +238,12 @@ TEST(Identify, ASymmetricPositionIsReportedWithBothMinima) {
   EXPECT_TRUE(near && far) << document["minima"].dump(1);
 }
 
-TEST(Identify, FrequenciesAndHarmonicRatiosOfTheFullModel) {
-  // data/identify-beam-ratios.csv: the five frequencies and A2/A1, A3/A1 at the tip driven at f_b1/2,
-  // those from the full explicit model of data/beam.yaml (its finer mesh) with 5 % noise. The forward
-  // model of the ratios is harmonic balance on the reduced model (a narrow sweep about drive_hz).
+TEST(Identify, FrequenciesAndHarmonicRatiosOfAConvergedModel) {
+  // data/identify-beam-ratios.csv: the five frequencies and A2/A1, A3/A1 at the tip driven at
+  // 103.153 Hz, those from the reduced model of data/beam.yaml on the default route's graded p = 4 mesh
+  // (converged to 0.2 %, the full explicit model's to 2e-4 on that mesh family) with 5 % noise. The
+  // forward model of the ratios is harmonic balance on the reduced model (a narrow sweep about
+  // drive_hz) on the identify scene's coarse mesh, graded towards the front like the modal batch.
   const fs::path dir = scratch("ratios");
   const fs::path scene = identify_scene(dir, cli_testing::data("identify-beam-ratios.csv"), 5, 0.05, 0.007);
   const auto result = crackle("identify " + scene.string() + " -o " + (dir / "out").string(), "OMP_NUM_THREADS=1");
@@ -249,17 +251,23 @@ TEST(Identify, FrequenciesAndHarmonicRatiosOfTheFullModel) {
   const json document = read_json(dir / "out" / "identify.json");
   expect_truth_inside(document, 0.05, 0.007);
   ASSERT_EQ(document["residuals"].size(), 7u);
+  int ratios = 0;
   for (const json& row : document["residuals"]) {
     if (row["quantity"] == "A2/A1" || row["quantity"] == "A3/A1") {
+      ++ratios;
       EXPECT_EQ(row["probe"], "tip");
       // The model value is the reduced model's at the drive frequency: within its model error (and
-      // the 5 % noise) of the full model's measured value.
+      // the 5 % noise) of the converged measured value.
       const double value = row["value"].get<double>(), model = row["model"].get<double>();
-      const double bar = std::hypot(row["sigma"].get<double>(), row["model_error"].get<double>());
-      EXPECT_GT(row["model_error"].get<double>(), 0.0);
-      EXPECT_LT(std::abs(model - value), 3.0 * bar) << row;
+      const double error = row["model_error"].get<double>();
+      EXPECT_GT(error, 0.0);
+      EXPECT_LT(std::abs(model - value), 3.0 * std::hypot(row["sigma"].get<double>(), error)) << row;
+      // On the graded mesh the ratios' model error at p = 2 is a few times their noise, not the
+      // uniform grid's 59 % (A2/A1) and 140 % (A3/A1) that left them no weight (benchmarks 13.5, 13.7).
+      EXPECT_LT(error / value, row["quantity"] == "A2/A1" ? 0.25 : 0.4) << row;
     }
   }
+  EXPECT_EQ(ratios, 2);
 }
 
 TEST(Identify, AMeasuredDampingRatioIdentifiesTheDampingWithTheCrack) {
