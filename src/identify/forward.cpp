@@ -317,6 +317,9 @@ std::vector<fs::path> run_forward_cases(const YAML::Node& base, const std::vecto
   study.output_dir = (folder / "runs").string();
   study.executable = runner.executable;
   study.jobs = runner.jobs;
+  // A forward run that failed fails the whole command (below), so a rerun retries it rather than
+  // reading the old failure back: a run killed or interrupted by its machine is redone.
+  study.retry_failed = true;
   // Modal batches: every case has its own (moved) mesh, so a cache would only add a primer per case.
   // Sweep batches: the cases of one crack (its drive points and frequencies) share one modal cache
   // folder, so the modal stage and the reduction of a drive point are computed once for them.

@@ -236,6 +236,21 @@ TEST(Identify, ASymmetricPositionIsReportedWithBothMinima) {
     EXPECT_TRUE(minimum["interval_95"]["crack.plane.at"][0].is_number());
   }
   EXPECT_TRUE(near && far) << document["minima"].dump(1);
+
+  // A rerun into the same folder reads the done forward runs back and redoes one recorded as failed
+  // (a run killed by its machine): it does not stop at the old failure.
+  const fs::path case_dir = dir / "out" / "map" / "runs" / "cases" / "0000";
+  json record = read_json(case_dir / "case.json");
+  record["status"] = "failed";
+  record["error"] = "killed";
+  std::ofstream(case_dir / "case.json") << record.dump(1);
+  fs::remove(case_dir / "modal.json");
+  const auto again = crackle("identify " + (dir / "identify.yaml").string() + " -o " + (dir / "out").string(),
+                             "OMP_NUM_THREADS=1");
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_NE(again.output.find(" already done, 1 to run "), std::string::npos) << again.output;
+  EXPECT_TRUE(fs::exists(case_dir / "modal.json"));
+  EXPECT_EQ(read_json(dir / "out" / "identify.json")["minima"], document["minima"]);
 }
 
 TEST(Identify, FrequenciesAndHarmonicRatiosOfAConvergedModel) {
