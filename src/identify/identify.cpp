@@ -564,6 +564,16 @@ std::vector<std::string> identifiability(const IdentifySpec& spec, const std::ve
                       ": some combination of the unknowns does not change the measured quantities");
   for (std::size_t j = 0; j < k; ++j)
     if (best.at_bound[j]) reasons.push_back(spec.unknowns[j].key + " is at a bound: its interval is not reliable");
+  // A linearised interval wider than the bounds: the measurements do not narrow the unknown beyond
+  // what was assumed before them (the profiles show the misfit inside the bounds).
+  for (std::size_t j = 0; j < k && !best.uncertainty.rank_deficient; ++j) {
+    const Unknown& unknown = spec.unknowns[j];
+    const double width = best.uncertainty.interval_95[j][1] - best.uncertainty.interval_95[j][0];
+    const double range = unknown.upper - unknown.lower;
+    if (width > range)
+      reasons.push_back(unknown.key + ": its 95 % interval (" + format_number(width) + ") is wider than its bounds (" +
+                        format_number(range) + "): the measurements do not determine it within them (see profiles)");
+  }
   for (std::size_t d = 1; d < minima.size(); ++d)
     if (minima[d].chi2 - best.chi2 < kEqualFit)
       reasons.push_back("several minima fit equally well (chi2 " + format_number(best.chi2) + " and " +
