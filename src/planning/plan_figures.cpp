@@ -100,29 +100,37 @@ SampleFigures sample_figures(const PlanSpec& spec, const PriorGrid& grid, const 
 /// The averages over the samples where the candidate responds: log det and the 95 % widths.
 void average(Candidate& c, std::size_t k) {
   double sum = 0.0;
-  c.worst_width.assign(k, 0.0);
-  c.mean_width.assign(k, 0.0);
+  std::vector<MatrixX> fishers;
   for (const SampleFigures& figures : c.samples) {
     if (!figures.responds) continue;
     ++c.responding;
-    const MatrixX fisher = figures.frequency_fisher + figures.sensor_fisher;
-    const double value = log_det(fisher);
-    sum += value;
-    const MatrixX covariance = std::isfinite(value) ? MatrixX(fisher.inverse())
-                                                    : MatrixX::Constant(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(k), kInf);
-    for (std::size_t j = 0; j < k; ++j) {
-      const double width = 2.0 * kZ95 * std::sqrt(covariance(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j)));
-      c.worst_width[j] = std::max(c.worst_width[j], width);
-      c.mean_width[j] += width;
-    }
+    fishers.push_back(figures.frequency_fisher + figures.sensor_fisher);
+    sum += log_det(fishers.back());
   }
-  if (c.responding > 0) {
-    c.mean_log_det = sum / c.responding;
-    for (double& width : c.mean_width) width /= c.responding;
-  }
+  IntervalWidths widths = interval_widths(fishers, k);
+  c.mean_width = std::move(widths.mean);
+  c.worst_width = std::move(widths.worst);
+  if (c.responding > 0) c.mean_log_det = sum / c.responding;
 }
 
 }  // namespace
+
+IntervalWidths interval_widths(const std::vector<MatrixX>& fishers, std::size_t k) {
+  IntervalWidths widths{std::vector<double>(k, 0.0), std::vector<double>(k, 0.0)};
+  for (const MatrixX& fisher : fishers) {
+    const bool regular = std::isfinite(log_det(fisher));
+    const MatrixX covariance = regular ? MatrixX(fisher.inverse()) : MatrixX();
+    for (std::size_t j = 0; j < k; ++j) {
+      const auto i = static_cast<Eigen::Index>(j);
+      const double width = regular ? 2.0 * kZ95 * std::sqrt(covariance(i, i)) : kInf;
+      widths.worst[j] = std::max(widths.worst[j], width);
+      widths.mean[j] += width;
+    }
+  }
+  if (!fishers.empty())
+    for (double& width : widths.mean) width /= static_cast<double>(fishers.size());
+  return widths;
+}
 
 std::vector<Candidate> candidate_figures(const PlanSpec& spec, const PriorGrid& grid, const ModalFigures& modal,
                                          const SampleSweeps& sweeps, const JacobianSweeps& jacobian) {

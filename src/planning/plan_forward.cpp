@@ -246,11 +246,11 @@ SampleSweeps sample_sweeps(PlanRun& run, const PriorGrid& grid, const ModalFigur
         // measured quantity's model error at the measured drive_hz, so the plan's weights are identify's
         // (with each level at its own resonance, A2/A1's error was 14.6 % against identify's 17.9 %
         // on the Plan test scene: log det 0.64 apart).
-        const double ratio = s < sweeps.n_levels ? drive.ratio * level_hz_ratio(modal, sweeps.n_levels - 1 - s, drive.mode)
-                                                 : drive.ratio;
-        ForwardCase forward = s < sweeps.n_levels
-                                  ? ForwardCase{grid.middle(), modal.levels[sweeps.n_levels - 1 - s], {}}
-                                  : ForwardCase{grid.samples[s - sweeps.n_levels], modal.order_run, {}};
+        const bool is_level = s < sweeps.n_levels;
+        const std::size_t level = is_level ? sweeps.n_levels - 1 - s : 0;  // the highest order first
+        const double ratio = is_level ? drive.ratio * level_hz_ratio(modal, level, drive.mode) : drive.ratio;
+        ForwardCase forward = is_level ? ForwardCase{grid.middle(), modal.levels[level], {}}
+                                       : ForwardCase{grid.samples[s - sweeps.n_levels], modal.order_run, {}};
         forward.set = {{"transient.excitation.point", point_text(spec.drive_points[p])},
                        {"sweep.frequency.from.mode", std::to_string(drive.mode)},
                        {"sweep.frequency.from.ratio", format_number(ratio * (1.0 - half))},

@@ -144,6 +144,13 @@ struct Candidate {
   std::vector<identify::RefinementError> model_error;  ///< of each ratio quantity, then of f_bilinear
 };
 
+/// The 95 % interval widths 2 x 1.96 sqrt(diag F^-1) over Fisher matrices (one per sample) of k
+/// unknowns: their mean and the worst (infinite where an F is singular).
+struct IntervalWidths {
+  std::vector<double> mean, worst;
+};
+IntervalWidths interval_widths(const std::vector<MatrixX>& fishers, std::size_t k);
+
 /// Stage 4: every candidate's figures at every sample and their averages where it responds.
 std::vector<Candidate> candidate_figures(const PlanSpec& spec, const PriorGrid& grid, const ModalFigures& modal,
                                          const SampleSweeps& sweeps, const JacobianSweeps& jacobian);

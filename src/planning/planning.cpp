@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <limits>
 #include <map>
 #include <ostream>
@@ -282,12 +283,31 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   const json& sets = document["best_sensors"]["sets"];
   const std::vector<std::string> chosen =
       sets.empty() ? std::vector<std::string>() : sets.back()["sensors"].get<std::vector<std::string>>();
+  // The mean 95 % widths against the prior's ranges: a width over its range is not determined.
+  const auto widths_text = [&](const json& widths) {
+    const auto three_digits = [](double value) {  // what a width is good to
+      std::ostringstream out;
+      out << std::setprecision(3) << value;
+      return out.str();
+    };
+    std::string text;
+    for (const identify::Unknown& key : spec.prior) {
+      const json& width = widths["mean"][key.key];
+      const double range = key.upper - key.lower;
+      text += (text.empty() ? "" : ", ") + key.key + " " + (width.is_number() ? three_digits(width.get<double>()) : "inf") +
+              " of " + three_digits(range) + (width.is_number() && width.get<double>() <= range ? "" : " (not determined)");
+    }
+    return text;
+  };
   log << "plan: best " << top["sensor"]["name"].get<std::string>() << " at (" << top["sensor"]["point"][0] << ", "
       << top["sensor"]["point"][1] << ", " << top["sensor"]["point"][2] << ") driven at "
       << top["drive"]["ratio"].get<double>() << " f_b" << top["drive"]["mode"].get<int>() << " from ("
       << top["drive"]["point"][0] << ", " << top["drive"]["point"][1] << ", " << top["drive"]["point"][2]
-      << "): mean log det " << top["log_det"] << "; best " << chosen.size() << " sensors: " << join(chosen) << "\n"
-      << "plan: " << run.forward_runs << " forward runs in "
+      << "): mean log det " << top["log_det"] << "; best " << chosen.size() << " sensors: " << join(chosen) << "\n";
+  for (const json& set : sets)
+    log << "plan: mean 95 % widths against the prior's ranges with " << join(set["sensors"].get<std::vector<std::string>>())
+        << ": " << widths_text(set["widths_95"]) << "\n";
+  log << "plan: " << run.forward_runs << " forward runs in "
       << format_number(std::round(document["elapsed_s"].get<double>() * 10) / 10) << " s; " << run.dir.string()
       << "/plan.json\n";
   return document;

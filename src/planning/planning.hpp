@@ -35,7 +35,7 @@
 ///   branch covers the drive frequency.
 /// Candidates are ranked by the mean of log det F over the samples where they respond (those that
 /// respond at every sample first); the best k = 1..combine sensors for the best drive are chosen
-/// greedily on the mean log det of the summed F.
+/// greedily on the mean log det of the summed F, each set with its 95 % widths from that F.
 /// Outputs: plan.json, plan_sensors.vtu, plan_log_det.png (log det along the sensors), plan_map.png (over a face of sensors).
 #include <iosfwd>
 #include <string>
