@@ -358,7 +358,9 @@ class PlanResult(Result):
     """``crackle plan``: ``json`` is plan.json; ``sensors`` the candidate sensors' points (n x 3, m) in
     the order of the scene's grid or list; ``candidates`` the ranked candidates as NumPy columns:
     ``rank``, ``sensor`` (index into ``sensors``), ``drive_point`` (n x 3, m), ``drive_mode``,
-    ``drive_ratio``, ``responds`` (bool), ``log_det`` (NaN where it does not respond)."""
+    ``drive_ratio``, ``responds`` (bool), ``log_det`` (NaN where it does not respond), and
+    ``widths_95_mean``, ``widths_95_worst``: {prior key: the predicted 95 % interval widths over the
+    samples} (NaN where none)."""
 
     main_document = "plan.json"
 
@@ -385,3 +387,7 @@ class PlanResult(Result):
             "responds": np.array([bool(c["responds"]) for c in ranked], dtype=bool),
             "log_det": np.array([number(c["log_det"]) for c in ranked], dtype=float),
         }
+        keys = list(ranked[0]["widths_95"]["mean"]) if ranked else []
+        for figure in ("mean", "worst"):
+            self.candidates["widths_95_" + figure] = {
+                key: np.array([number(c["widths_95"][figure].get(key)) for c in ranked], dtype=float) for key in keys}

@@ -8,6 +8,8 @@ import json
 import os
 import shutil
 
+import numpy as np
+
 import pytest
 
 import crackle
@@ -106,3 +108,7 @@ def test_write_gives_the_command_line_files(name, command, overrides, tmp_path):
         for row, candidate in enumerate(ranked):
             assert list(result.sensors[result.candidates["sensor"][row]]) == candidate["sensor"]["point"]
             assert result.candidates["responds"][row] == candidate["responds"]
+            for figure in ("mean", "worst"):
+                for key, width in candidate["widths_95"][figure].items():
+                    got, expected = result.candidates["widths_95_" + figure][key][row], np.nan if width is None else width
+                    assert got == expected or (np.isnan(got) and np.isnan(expected))
