@@ -261,7 +261,9 @@ json identify_json(const IdentifyFigures& f) {
   document["map"] = {{"points_per_unknown", spec.map_points}, {"runs", static_cast<int>(f.grid.size())},
                      {"folder", f.map_dir.string()}, {"best_chi2", f.best_map}, {"minima_kept", f.starts}};
   document["profiles"] = profiles_json(f);
-  document["local_fits"] = {{"gauss_newton_iterations", f.gauss_newton}, {"levenberg_marquardt", f.levenberg_marquardt}};
+  document["local_fits"] = {{"gauss_newton_iterations", f.gauss_newton},
+                             {"levenberg_marquardt", f.levenberg_marquardt},
+                             {"from_map_point", f.from_map_point}};
   return document;
 }
 

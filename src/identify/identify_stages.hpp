@@ -49,6 +49,7 @@ struct IdentifyFigures {
   std::vector<std::string> reasons;       ///< why the crack is not identifiable (empty: it is)
   double reference_at = 0.0;              ///< the reference crack's plane (the middle of the bounds)
   int gauss_newton = 0, levenberg_marquardt = 0;
+  int from_map_point = 0;  ///< local fits redone from their map point (the first ended above it)
   const Fitted& best() const { return minima.front(); }
 };
 
