@@ -2,6 +2,7 @@
 
 #include <ceres/ceres.h>
 #include <Eigen/QR>
+#include <Eigen/SVD>
 
 #include <algorithm>
 #include <cmath>
@@ -130,6 +131,58 @@ Eigen::RowVectorXd spline_at(const std::vector<double>& x, const MatrixX& y, dou
 }
 
 }  // namespace
+
+VectorX bounded_linear_step(const MatrixX& jacobian, const VectorX& r, const VectorX& lower, const VectorX& upper) {
+  const Eigen::Index k = jacobian.cols();
+  const auto misfit = [&](const VectorX& d) { return (r + jacobian * d).squaredNorm(); };
+  VectorX best = VectorX::Zero(k);  // feasible: lower <= 0 <= upper
+  double best_misfit = misfit(best);
+  if (k <= 8) {
+    // The minimum of a convex quadratic over a box has some active set (each unknown free, at its
+    // lower or at its upper bound) with the free unknowns at their reduced least-squares solution:
+    // every feasible such candidate bounds the minimum from above, and the least of them is it.
+    Eigen::Index patterns = 1;
+    for (Eigen::Index j = 0; j < k; ++j) patterns *= 3;
+    for (Eigen::Index pattern = 0; pattern < patterns; ++pattern) {
+      VectorX d = VectorX::Zero(k);
+      std::vector<Eigen::Index> free;
+      Eigen::Index rest = pattern;
+      for (Eigen::Index j = 0; j < k; ++j, rest /= 3) {
+        if (rest % 3 == 0) free.push_back(j);
+        else d[j] = rest % 3 == 1 ? lower[j] : upper[j];
+      }
+      if (!free.empty()) {
+        MatrixX reduced(jacobian.rows(), static_cast<Eigen::Index>(free.size()));
+        for (std::size_t c = 0; c < free.size(); ++c) reduced.col(static_cast<Eigen::Index>(c)) = jacobian.col(free[c]);
+        const VectorX solved = reduced.colPivHouseholderQr().solve(-(r + jacobian * d));
+        for (std::size_t c = 0; c < free.size(); ++c) d[free[c]] = solved[static_cast<Eigen::Index>(c)];
+      }
+      bool feasible = d.allFinite();
+      for (Eigen::Index j = 0; j < k && feasible; ++j) {
+        const double slack = 1e-12 * std::max(upper[j] - lower[j], 1e-300);
+        feasible = d[j] >= lower[j] - slack && d[j] <= upper[j] + slack;
+      }
+      if (!feasible) continue;
+      d = d.cwiseMax(lower).cwiseMin(upper);
+      const double value = misfit(d);
+      if (value < best_misfit) {
+        best_misfit = value;
+        best = d;
+      }
+    }
+    return best;
+  }
+  // Projected gradient on the quadratic with the step 1/|J|_2^2 (monotone).
+  const Eigen::JacobiSVD<MatrixX> svd(jacobian);
+  const double lipschitz = std::max(svd.singularValues()[0] * svd.singularValues()[0], 1e-300);
+  VectorX d = best;
+  for (int iteration = 0; iteration < 100000; ++iteration) {
+    const VectorX next = (d - jacobian.transpose() * (r + jacobian * d) / lipschitz).cwiseMax(lower).cwiseMin(upper);
+    if ((next - d).norm() <= 1e-14 * (1.0 + d.norm())) break;
+    d = next;
+  }
+  return d;
+}
 
 std::vector<bool> at_bounds(const VectorX& theta, const Bounds& bounds) {
   std::vector<bool> at;

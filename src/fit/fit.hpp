@@ -5,6 +5,8 @@
 ///
 /// - fit_bounded(): Levenberg-Marquardt with bounds (Ceres), Jacobians by one-sided finite
 ///   differences that stay inside the bounds, evaluated as one batch per Jacobian;
+/// - bounded_linear_step(): the Gauss-Newton step of a bounded fit (the linearised misfit's minimum
+///   over the box);
 /// - uncertainty(): the Gauss-Newton covariance C = s^2 (J^T J)^-1 through a QR of J (eq. 8), the
 ///   95 % intervals with Student's t (eq. 9), the correlation matrix, the rank;
 /// - student_t_quantile(): the quantile of Student's t distribution;
@@ -62,6 +64,15 @@ std::vector<VectorX> jacobian_points(const VectorX& theta, const Bounds& bounds,
 /// that would leave the bounds.
 MatrixX jacobian(const BatchResiduals& residuals, const VectorX& theta, const VectorX& r0, const Bounds& bounds,
                  const VectorX& steps, int* evaluations = nullptr);
+
+/// The step d that minimises |r + J d|^2 over lower <= d <= upper (lower <= 0 <= upper): the
+/// Gauss-Newton step of a fit at theta kept inside its bounds (lower = bounds.lower - theta, upper =
+/// bounds.upper - theta). Unlike the unconstrained step clipped to the box, it is the minimum of the
+/// linearised misfit over the box, so its predicted decrease is zero exactly where theta is a
+/// stationary point of the bounded fit (a clipped step can predict a rise while the misfit still
+/// falls along a bound). Exact by active sets (each unknown free, at its lower or at its upper
+/// bound) for up to 8 unknowns; beyond, projected gradient iterations.
+VectorX bounded_linear_step(const MatrixX& jacobian, const VectorX& r, const VectorX& lower, const VectorX& upper);
 
 /// Minimises sum r_i(theta)^2 over lower <= theta <= upper from `start` (clamped into the bounds).
 FitResult fit_bounded(const BatchResiduals& residuals, const VectorX& start, const Bounds& bounds,

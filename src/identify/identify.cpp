@@ -53,6 +53,7 @@ constexpr double kForwardStep = 1e-4;
 constexpr double kAccept = 0.1;
 /// Gauss-Newton iterations on the forward model before Levenberg-Marquardt takes over.
 constexpr int kGaussNewtonIterations = 4;
+constexpr int kHalvings = 4;  ///< trials of a Gauss-Newton step: 1, 1/2, 1/4, 1/8 of it
 
 [[noreturn]] void fail(const std::string& file, int line, const std::string& path, const std::string& expected,
                        const std::string& got) {
@@ -480,30 +481,30 @@ class ForwardResiduals {
   int batch_ = 0;
 };
 
-/// A local fit on the forward model from the interpolant's estimate `start`: Gauss-Newton until its
-/// step is below kAccept of the estimate's standard deviation (each iteration one batch: the point
-/// and its Jacobian); Levenberg-Marquardt takes over when a step does not lower chi^2.
+/// A local fit on the forward model from the interpolant's estimate `start`: bounded Gauss-Newton
+/// (fit::bounded_linear_step) until its step is below kAccept of the estimate's standard deviation
+/// (each iteration one batch: the point and its Jacobian), the step halved until it lowers chi^2;
+/// Levenberg-Marquardt takes over from the lowest point when no halving does.
 detail::Fitted fit_minimum(const fit::BatchResiduals& on_model, const VectorX& start, const fit::Bounds& bounds,
                            const VectorX& steps, bool scale_by_fit, const std::string& which, std::ostream& log,
                            int& gauss_newton, int& levenberg_marquardt) {
-  VectorX theta = start;
+  VectorX theta = start;  // every move lowers chi^2: theta is the lowest point so far
   fit::FitResult result;
   bool accepted = false;
-  double previous = std::numeric_limits<double>::infinity();
   for (int iteration = 0; iteration < kGaussNewtonIterations && !accepted; ++iteration) {
     std::vector<VectorX> points = {theta};
     for (const VectorX& point : fit::jacobian_points(theta, bounds, steps)) points.push_back(point);
     on_model(points);
     const VectorX r0 = on_model({theta}).front();
-    if (!r0.allFinite() || !(r0.squaredNorm() < previous)) break;
-    previous = r0.squaredNorm();
+    if (!r0.allFinite()) break;
     ++gauss_newton;
     const MatrixX j0 = fit::jacobian(on_model, theta, r0, bounds, steps);
     const fit::Uncertainty u0 = fit::uncertainty(j0, theta, r0.squaredNorm(), scale_by_fit);
     if (!j0.allFinite() || u0.rank_deficient) break;
-    // The Gauss-Newton step, kept inside the bounds, in units of the covariance (Mahalanobis).
-    const VectorX step = j0.colPivHouseholderQr().solve(-r0);
-    const VectorX moved = (theta + step).cwiseMax(bounds.lower).cwiseMin(bounds.upper) - theta;
+    // The Gauss-Newton step of the bounded fit (the linearised misfit's minimum over the bounds, not
+    // the free step clipped to them, which can predict a rise where the misfit still falls along a
+    // bound) and its predicted decrease in units of the covariance (Mahalanobis).
+    const VectorX moved = fit::bounded_linear_step(j0, r0, bounds.lower - theta, bounds.upper - theta);
     const double change = (r0.squaredNorm() - (r0 + j0 * moved).squaredNorm()) / u0.s2;
     const double step_in_sd = std::sqrt(std::max(change, 0.0));
     log << "identify: minimum " << which << ", Gauss-Newton iteration " << iteration + 1 << ": chi2 "
@@ -516,9 +517,19 @@ detail::Fitted fit_minimum(const fit::BatchResiduals& on_model, const VectorX& s
       result.chi2 = r0.squaredNorm();
       result.converged = true;
       result.at_bound = fit::at_bounds(theta, bounds);
-    } else {
-      theta += moved;
+      break;
     }
+    // Backtracking along the step (each trial one forward run; the box is convex, so every trial is
+    // inside it): the first that lowers chi^2 is taken, else Levenberg-Marquardt goes on from theta.
+    bool lowered = false;
+    for (int halving = 0; halving < kHalvings && !lowered; ++halving) {
+      const VectorX trial = theta + std::ldexp(1.0, -halving) * moved;
+      const VectorX r = on_model({trial}).front();
+      lowered = r.allFinite() && r.squaredNorm() < r0.squaredNorm();
+      if (lowered) theta = trial;
+      if (lowered && halving > 0) log << "identify: minimum " << which << ": step halved " << halving << " time(s)\n";
+    }
+    if (!lowered) break;
   }
   if (!accepted) {
     fit::FitOptions exact;
@@ -527,7 +538,7 @@ detail::Fitted fit_minimum(const fit::BatchResiduals& on_model, const VectorX& s
     exact.function_tolerance = 1e-8;
     exact.parameter_tolerance = 1e-7;
     log << "identify: minimum " << which << ": Levenberg-Marquardt on the forward model\n";
-    result = fit::fit_bounded(on_model, start, bounds, exact);
+    result = fit::fit_bounded(on_model, theta, bounds, exact);
     ++levenberg_marquardt;
   }
   detail::Fitted f;

@@ -1,5 +1,6 @@
 // Bounded least squares, its covariance and intervals, Student's t, the tensor spline and the
-// minima of a grid and the 2D profile of a misfit: each against an exact answer.
+// minima of a grid and the 2D profile of a misfit, the bounded Gauss-Newton step: each against an
+// exact answer or its optimality conditions.
 #include <gtest/gtest.h>
 
 #include <Eigen/LU>
@@ -93,6 +94,66 @@ TEST(FitBounded, StopsAtAnActiveBoundAndSaysSo) {
   EXPECT_FALSE(result.at_bound[0]);
   // The Jacobian at the upper bound is one-sided from inside.
   EXPECT_TRUE(result.jacobian.allFinite());
+}
+
+/// The bounded step's optimality (KKT) conditions: feasible, the gradient of |r + J d|^2 zero on a
+/// free unknown, pointing out of the box on one at a bound. Returns the largest violation, relative
+/// to the gradient at d = 0.
+double kkt_violation(const MatrixX& j, const VectorX& r, const VectorX& lower, const VectorX& upper, const VectorX& d) {
+  const VectorX g = 2.0 * j.transpose() * (r + j * d);
+  const double scale = (2.0 * j.transpose() * r).norm() + 1e-300;
+  double worst = 0.0;
+  for (Eigen::Index i = 0; i < d.size(); ++i) {
+    const double width = upper[i] - lower[i];
+    worst = std::max(worst, std::max(lower[i] - d[i], d[i] - upper[i]) / width);
+    const bool at_lower = d[i] <= lower[i] + 1e-9 * width, at_upper = d[i] >= upper[i] - 1e-9 * width;
+    if (at_lower) worst = std::max(worst, -g[i] / scale);      // the misfit must rise inwards
+    else if (at_upper) worst = std::max(worst, g[i] / scale);
+    else worst = std::max(worst, std::abs(g[i]) / scale);
+  }
+  return worst;
+}
+
+TEST(BoundedLinearStep, FindsTheDecreaseThatTheClippedGaussNewtonStepMisses) {
+  // Nearly parallel columns: the free step (11, -10) lies far outside the box |d| <= 0.2. Clipped
+  // to it, (0.2, -0.2) predicts a rise (misfit 1.0004 from 1), which a fit reads as "no step left";
+  // the minimum over the box is the corner (0.2, 0.2) with misfit 0.6^2 + 0.42^2 = 0.5364.
+  const MatrixX j = (MatrixX(2, 2) << 1.0, 1.0, 1.0, 1.1).finished();
+  const VectorX r = (VectorX(2) << -1.0, 0.0).finished();
+  const VectorX lower = VectorX::Constant(2, -0.2), upper = VectorX::Constant(2, 0.2);
+  const VectorX clipped = j.colPivHouseholderQr().solve(-r).cwiseMax(lower).cwiseMin(upper);
+  EXPECT_GT((r + j * clipped).squaredNorm(), r.squaredNorm());
+  const VectorX d = bounded_linear_step(j, r, lower, upper);
+  EXPECT_NEAR(d[0], 0.2, 1e-12);
+  EXPECT_NEAR(d[1], 0.2, 1e-12);
+  EXPECT_NEAR((r + j * d).squaredNorm(), 0.5364, 1e-12);
+  EXPECT_LT(kkt_violation(j, r, lower, upper, d), 1e-12);
+}
+
+TEST(BoundedLinearStep, IsTheFreeStepInsideTheBoxAndOptimalOnRandomBoxes) {
+  std::mt19937 random(29);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  for (int k : {1, 2, 3, 5, 10}) {  // 10: the projected-gradient route
+    for (int trial = 0; trial < 20; ++trial) {
+      const Eigen::Index n = k + 4;
+      MatrixX j(n, k);
+      VectorX r(n), lower(k), upper(k);
+      for (Eigen::Index a = 0; a < n; ++a) {
+        r[a] = uniform(random);
+        for (Eigen::Index b = 0; b < k; ++b) j(a, b) = uniform(random);
+      }
+      for (Eigen::Index b = 0; b < k; ++b) {
+        lower[b] = -0.05 - 0.5 * std::abs(uniform(random));
+        upper[b] = 0.05 + 0.5 * std::abs(uniform(random));
+      }
+      const VectorX d = bounded_linear_step(j, r, lower, upper);
+      EXPECT_LT(kkt_violation(j, r, lower, upper, d), k <= 8 ? 1e-10 : 1e-6) << "k " << k << ", trial " << trial;
+      // A box wide enough to hold the free step gives the free step.
+      const VectorX free = j.colPivHouseholderQr().solve(-r);
+      const VectorX wide = VectorX::Constant(k, 2.0 * free.cwiseAbs().maxCoeff() + 1.0);
+      EXPECT_LT((bounded_linear_step(j, r, -wide, wide) - free).norm(), 1e-6 * (1.0 + free.norm())) << "k " << k;
+    }
+  }
 }
 
 TEST(FitBounded, AResidualWithoutAValueStopsTheFitQuietly) {
