@@ -139,17 +139,15 @@ json best_sensors_json(const PlanSpec& spec, const PlanFigures& figures) {
   json sets = json::array();
   std::vector<std::string> chosen;
   json points_of_set = json::array();
-  std::vector<MatrixX> summed = base_fisher;  // each sample's Fisher information of the set so far
-  for (const auto& [sensor, value] : greedy_sensors(base_fisher, per_sensor, spec.combine)) {
-    const auto s = static_cast<std::size_t>(sensor);
+  for (const GreedyStep& step : greedy_sensors(base_fisher, per_sensor, spec.combine)) {
+    const auto s = static_cast<std::size_t>(step.sensor);
     chosen.push_back(sensor_name(s));
     points_of_set.push_back(point_json(spec.sensors[s]));
-    for (std::size_t sample = 0; sample < summed.size(); ++sample) summed[sample] += per_sensor[s][sample];
-    const IntervalWidths widths = interval_widths(summed, spec.prior.size());
+    const IntervalWidths widths = interval_widths(step.fisher, spec.prior.size());
     sets.push_back({{"k", chosen.size()},
                     {"sensors", chosen},
                     {"points", points_of_set},
-                    {"log_det", finite_or_null(value)},
+                    {"log_det", finite_or_null(step.log_det)},
                     {"widths_95", {{"mean", keyed(spec, widths.mean)}, {"worst", keyed(spec, widths.worst)}}}});
   }
   return {{"drive", {{"point", point_json(spec.drive_points[best.drive])},

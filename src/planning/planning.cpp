@@ -177,9 +177,9 @@ double log_det(const MatrixX& fisher) {
   return lambda.array().log().sum();
 }
 
-std::vector<std::pair<int, double>> greedy_sensors(const std::vector<MatrixX>& base,
-                                                   const std::vector<std::vector<MatrixX>>& per_sensor, int count) {
-  std::vector<std::pair<int, double>> chosen;
+std::vector<GreedyStep> greedy_sensors(const std::vector<MatrixX>& base, const std::vector<std::vector<MatrixX>>& per_sensor,
+                                       int count) {
+  std::vector<GreedyStep> chosen;
   std::vector<MatrixX> sum = base;
   std::vector<bool> used(per_sensor.size(), false);
   for (int step = 0; step < count && step < static_cast<int>(per_sensor.size()); ++step) {
@@ -203,7 +203,7 @@ std::vector<std::pair<int, double>> greedy_sensors(const std::vector<MatrixX>& b
     }
     used[static_cast<std::size_t>(best)] = true;
     for (std::size_t s = 0; s < sum.size(); ++s) sum[s] += per_sensor[static_cast<std::size_t>(best)][s];
-    chosen.emplace_back(best, best_value);
+    chosen.push_back({best, best_value, sum});
   }
   return chosen;
 }

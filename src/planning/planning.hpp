@@ -87,11 +87,18 @@ struct PlanOptions {
 /// Runs the plan; progress to `log`. Returns the plan.json document.
 nlohmann::json run_plan(const PlanOptions& options, std::ostream& log);
 
+/// One step of the greedy sensor choice: the sensor added, the mean log det over samples after it,
+/// and each sample's Fisher information of the set so far.
+struct GreedyStep {
+  int sensor = -1;
+  double log_det = 0.0;
+  std::vector<MatrixX> fisher;
+};
+
 /// Greedy choice of sensors on the mean log det over samples of base[s] + sum over chosen of
-/// per_sensor[c][s] (k x k Fisher matrices): the order of the chosen candidates (at most `count`)
-/// and the mean log det after each. Exposed for tests.
-std::vector<std::pair<int, double>> greedy_sensors(const std::vector<MatrixX>& base,
-                                                   const std::vector<std::vector<MatrixX>>& per_sensor, int count);
+/// per_sensor[c][s] (k x k Fisher matrices): the chosen candidates in order (at most `count`).
+std::vector<GreedyStep> greedy_sensors(const std::vector<MatrixX>& base, const std::vector<std::vector<MatrixX>>& per_sensor,
+                                       int count);
 
 /// log det of a symmetric positive semi-definite matrix; -infinity when it is singular (an
 /// eigenvalue at most 1e-12 of the largest).
