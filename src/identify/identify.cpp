@@ -700,8 +700,16 @@ void local_fits(Forward& forward, const fit::BatchResiduals& on_spline, const st
   fit::FitOptions smooth;
   smooth.steps = VectorX::Constant(static_cast<Eigen::Index>(k), 1e-6);
   std::vector<VectorX> smooth_estimates, check_points;
-  for (std::size_t s : starts) {
-    smooth_estimates.push_back(fit::fit_bounded(on_spline, figures.grid[s], bounds, smooth).theta);
+  // Map minima whose interpolant estimates coincide (within 1e-3 of the bounds, distinct_minima's
+  // rule) start one fit: the second would run the same forward cases a few 1e-7 apart.
+  std::vector<std::size_t> first_with(starts.size());
+  for (std::size_t s = 0; s < starts.size(); ++s) {
+    smooth_estimates.push_back(fit::fit_bounded(on_spline, figures.grid[starts[s]], bounds, smooth).theta);
+    first_with[s] = s;
+    for (std::size_t t = 0; t < s && first_with[s] == s; ++t)
+      if ((smooth_estimates[s] - smooth_estimates[t]).cwiseQuotient(bounds.upper - bounds.lower).cwiseAbs().maxCoeff() < 1e-3)
+        first_with[s] = t;
+    if (first_with[s] != s) continue;
     check_points.push_back(smooth_estimates.back());
     for (const VectorX& point : fit::jacobian_points(smooth_estimates.back(), bounds, steps)) check_points.push_back(point);
   }
@@ -711,6 +719,11 @@ void local_fits(Forward& forward, const fit::BatchResiduals& on_spline, const st
   std::vector<detail::Fitted> fitted;
   for (std::size_t s = 0; s < starts.size(); ++s) {
     const std::string which = std::to_string(s + 1) + "/" + std::to_string(starts.size());
+    if (first_with[s] != s) {
+      log << "identify: minimum " << which << ": the interpolant's estimate is minimum " << first_with[s] + 1
+          << "'s: fitted once\n";
+      continue;
+    }
     detail::Fitted f = fit_minimum(on_model, smooth_estimates[s], bounds, steps, figures.spec.scale_by_fit, which, log,
                                    figures.gauss_newton, figures.levenberg_marquardt);
     // A coarse map's interpolant can start the fit in another valley, where Gauss-Newton stops at a
