@@ -489,7 +489,9 @@ void StudyRun::progress(bool force) {
 void StudyRun::write_tables() {
   const StudyTable table = build_table(plan_, finished_);
   io::write_file_atomic(directory_ / "study.csv", table_csv(table));
-  const PlotReport plots = plot_study(plan_, table, directory_ / "plots", options_.gnuplot);
+  // No gnuplot program named: a caller that reads only the tables (identify's forward batches).
+  const PlotReport plots =
+      options_.gnuplot.empty() ? PlotReport{} : plot_study(plan_, table, directory_ / "plots", options_.gnuplot);
   json document = study_json(plan_, table, finished_);
   document["plots"] = {{"folder", "plots"}, {"written", plots.written}, {"notes", plots.notes}};
   io::write_json(directory_ / "study.json", document);

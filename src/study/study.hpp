@@ -36,7 +36,7 @@ struct StudyOptions {
   /// OMP_NUM_THREADS and OPENBLAS_NUM_THREADS of the case processes where the environment does not
   /// set them; 0: leave unset.
   int threads_per_case = 1;
-  std::string gnuplot = "gnuplot";  ///< for the plots; a missing gnuplot skips them with a note
+  std::string gnuplot = "gnuplot";  ///< for the plots; a missing gnuplot skips them with a note; empty: no plots
   int rank = -1;                    ///< this process's rank; -1: from the MPI launcher's environment (else 0)
   int n_ranks = -1;                 ///< number of ranks; -1: from the environment (else 1)
   double poll_interval_s = 0.05;    ///< how often running cases are checked

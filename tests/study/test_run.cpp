@@ -257,9 +257,17 @@ TEST(StudyRun, JobsOneAndTwoGiveIdenticalTables) {
       << log;
   EXPECT_TRUE(fs::exists(workspace.root / "two/plots/tip.beta_vs_crack.region.z.gp"));
   EXPECT_FALSE(fs::exists(workspace.root / "two/plots/tip.beta_vs_crack.region.z.png"));
+  // No program named (identify's forward batches): no plots and no note about gnuplot.
+  StudyOptions three = options_for(workspace, "three", 2);
+  three.gnuplot = "";
+  log.clear();
+  ASSERT_EQ(run_quietly(three, &log), kExitFailedCases);
+  EXPECT_EQ(log.find("gnuplot"), std::string::npos) << log;
+  EXPECT_FALSE(fs::exists(workspace.root / "three/plots/tip.beta_vs_crack.region.z.gp"));
   const std::string one = read(workspace.root / "one/study.csv");
   EXPECT_EQ(lines_of(one).size(), 7u);
   EXPECT_EQ(one, read(workspace.root / "two/study.csv"));
+  EXPECT_EQ(one, read(workspace.root / "three/study.csv"));
 }
 
 TEST(StudyRun, KilledStudyResumesWithoutComputingACaseTwice) {
