@@ -551,6 +551,11 @@ detail::Fitted fit_minimum(const fit::BatchResiduals& on_model, const VectorX& s
   return f;
 }
 
+/// Two parameter vectors within 1e-3 of the bounds' widths of each other in every unknown: one point.
+bool same_point(const VectorX& a, const VectorX& b, const fit::Bounds& bounds) {
+  return (a - b).cwiseQuotient(bounds.upper - bounds.lower).cwiseAbs().maxCoeff() < 1e-3;
+}
+
 /// The fitted minima, the best first; starts that converged to the same point are one minimum.
 std::vector<detail::Fitted> distinct_minima(std::vector<detail::Fitted> fitted, const fit::Bounds& bounds) {
   std::sort(fitted.begin(), fitted.end(), [](const detail::Fitted& a, const detail::Fitted& b) { return a.chi2 < b.chi2; });
@@ -558,7 +563,7 @@ std::vector<detail::Fitted> distinct_minima(std::vector<detail::Fitted> fitted, 
   for (const detail::Fitted& f : fitted) {
     bool same = false;
     for (const detail::Fitted& d : distinct)
-      same = same || ((f.theta - d.theta).cwiseQuotient(bounds.upper - bounds.lower).cwiseAbs().maxCoeff() < 1e-3);
+      same = same || same_point(f.theta, d.theta, bounds);
     if (!same) distinct.push_back(f);
   }
   return distinct;
@@ -700,15 +705,14 @@ void local_fits(Forward& forward, const fit::BatchResiduals& on_spline, const st
   fit::FitOptions smooth;
   smooth.steps = VectorX::Constant(static_cast<Eigen::Index>(k), 1e-6);
   std::vector<VectorX> smooth_estimates, check_points;
-  // Map minima whose interpolant estimates coincide (within 1e-3 of the bounds, distinct_minima's
-  // rule) start one fit: the second would run the same forward cases a few 1e-7 apart.
+  // Map minima whose interpolant estimates coincide (same_point, distinct_minima's rule) start one
+  // fit: the second would run the same forward cases a few 1e-7 apart.
   std::vector<std::size_t> first_with(starts.size());
   for (std::size_t s = 0; s < starts.size(); ++s) {
     smooth_estimates.push_back(fit::fit_bounded(on_spline, figures.grid[starts[s]], bounds, smooth).theta);
     first_with[s] = s;
     for (std::size_t t = 0; t < s && first_with[s] == s; ++t)
-      if ((smooth_estimates[s] - smooth_estimates[t]).cwiseQuotient(bounds.upper - bounds.lower).cwiseAbs().maxCoeff() < 1e-3)
-        first_with[s] = t;
+      if (same_point(smooth_estimates[s], smooth_estimates[t], bounds)) first_with[s] = t;
     if (first_with[s] != s) continue;
     check_points.push_back(smooth_estimates.back());
     for (const VectorX& point : fit::jacobian_points(smooth_estimates.back(), bounds, steps)) check_points.push_back(point);
