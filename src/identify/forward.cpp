@@ -94,7 +94,7 @@ std::vector<int> refinement_orders(int p) {
 RefinementError refinement_error(double q0, double q1, double q2, int run_level) {
   const std::array<double, 3> q = {q0, q1, q2};
   const double run = q[static_cast<std::size_t>(run_level)];
-  if (!std::isfinite(run)) return {0.0, false};
+  if (!std::isfinite(run) || run == 0.0) return {0.0, false};  // no relative error of a zero (no sub-harmonic)
   if (std::isfinite(q0) && std::isfinite(q1) && std::isfinite(q2)) {
     const accuracy::Component component = accuracy::three_level_at(
         "mesh", q0, q1, q2, run_level + 1, accuracy::kOrderLevelRatio, accuracy::kOrderRateMin, accuracy::kOrderRateMax);
@@ -398,6 +398,62 @@ double sweep_value(const SweepTable& table, const std::string& quantity, const s
     const double w = (drive_hz - f0) / (f1 - f0);
     return (1.0 - w) * a[static_cast<std::size_t>(index)] + w * b[static_cast<std::size_t>(index)];
   }
+  return kNaN;
+}
+
+namespace {
+
+/// The rows of `table` on the branch of `period` excitation periods around (or at) the drive, each
+/// pair [a, b] of consecutive rows whose frequencies enclose it; a row at the drive itself gives
+/// [r, r]. Consecutive rows further apart than the continuation's longest step over a sweep about a
+/// sub-harmonic drive (kSubharmonicHalfWidth, kSubharmonicPoints) are the end of one segment of the
+/// branch and the start of the next, not neighbours.
+std::vector<std::pair<std::size_t, std::size_t>> rows_around(const SweepTable& table, double drive_hz, int period) {
+  const double longest_step = (1.0 + 1e-9) * 2.0 * kSubharmonicHalfWidth * drive_hz / kSubharmonicPoints;
+  const int column = table.column("branch period [excitation periods]");
+  const auto on_branch = [&](std::size_t r) {
+    return column < 0 ? period == 1 : std::lround(table.rows[r][static_cast<std::size_t>(column)]) == period;
+  };
+  const double at = 1e-12 * drive_hz;
+  std::vector<std::pair<std::size_t, std::size_t>> around;
+  for (std::size_t r = 0; r < table.rows.size(); ++r)
+    if (on_branch(r) && std::abs(table.rows[r][0] - drive_hz) <= at) around.emplace_back(r, r);
+  for (std::size_t r = 0; r + 1 < table.rows.size(); ++r) {
+    const double f0 = table.rows[r][0], f1 = table.rows[r + 1][0];
+    if (on_branch(r) && on_branch(r + 1) && (f0 - drive_hz) * (f1 - drive_hz) < 0.0 && std::abs(f1 - f0) <= longest_step)
+      around.emplace_back(r, r + 1);
+  }
+  return around;
+}
+
+/// Whether both rows of `around` are stable.
+bool stable_rows(const SweepTable& table, const std::pair<std::size_t, std::size_t>& around) {
+  const int stable = table.column("stable [1 yes, 0 no, -1 not computed]");
+  if (stable < 0) return false;
+  const auto column = static_cast<std::size_t>(stable);
+  return table.rows[around.first][column] == 1.0 && table.rows[around.second][column] == 1.0;
+}
+
+}  // namespace
+
+bool period_two_exists(const SweepTable& table, double drive_hz) {
+  for (const auto& around : rows_around(table, drive_hz, 2))
+    if (stable_rows(table, around)) return true;
+  return false;
+}
+
+double subharmonic_value(const SweepTable& table, const std::string& probe, double drive_hz) {
+  const int index = table.probe_column(probe, "A1/2/A1 [-]");
+  if (index < 0) return kNaN;
+  const auto value = [&](const std::pair<std::size_t, std::size_t>& around) {
+    const std::vector<double>&a = table.rows[around.first], &b = table.rows[around.second];
+    const double w = around.first == around.second ? 0.0 : (drive_hz - a[0]) / (b[0] - a[0]);
+    return (1.0 - w) * a[static_cast<std::size_t>(index)] + w * b[static_cast<std::size_t>(index)];
+  };
+  for (const auto& around : rows_around(table, drive_hz, 2))  // a row at the drive comes first
+    if (stable_rows(table, around)) return value(around);
+  for (const auto& around : rows_around(table, drive_hz, 1))
+    if (stable_rows(table, around)) return 0.0;
   return kNaN;
 }
 

@@ -93,6 +93,23 @@ SweepTable read_sweep_csv(const std::filesystem::path& path);
 double sweep_value(const SweepTable& table, const std::string& quantity, const std::string& probe, double drive_hz,
                    int branch_period = 1);
 
+/// The sweep about a drive frequency at which a sub-harmonic (A1/2/A1) is read: this half-width,
+/// relative, and this many points, with stability and `subharmonic: 2`. The period-two branch is born
+/// at a period doubling somewhere around 2 f_b; the sweep must find it and follow it.
+inline constexpr double kSubharmonicHalfWidth = 0.15;
+inline constexpr int kSubharmonicPoints = 40;
+
+/// Whether the table's period-two branch is stable at the drive frequency (a row there, or two
+/// neighbouring rows around it, all stable).
+bool period_two_exists(const SweepTable& table, double drive_hz);
+
+/// A1/2/A1 of a probe at the drive frequency, as a lab driving there at steady state measures it:
+/// on the stable period-two branch where the table has one at the drive (its row at the drive from
+/// sweep.solve_at, else interpolated); 0 where the period-one response is stable there and no stable
+/// period-two one exists (no sub-harmonic); NaN where neither is stable (no periodic steady state
+/// the sweep knows) or the table does not reach the drive.
+double subharmonic_value(const SweepTable& table, const std::string& probe, double drive_hz);
+
 /// The mesh orders of the model-error estimate of a forward model run at order p: {min(p, 2),
 /// +1, +2} (identify's and plan's; DETECTION.md sec. 1, the p-refinement of MODEL.md's elements).
 std::vector<int> refinement_orders(int p);

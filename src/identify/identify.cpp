@@ -15,6 +15,7 @@
 #include <ostream>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include <Eigen/Cholesky>
 #include <Eigen/QR>
@@ -114,9 +115,9 @@ class Forward {
   Forward(const IdentifySpec& spec, YAML::Node base, const scene::DampingSection& damping,
           const IdentifyOptions& options, std::ostream& log)
       : spec_(spec), base_(std::move(base)), scene_damping_(damping), options_(options), log_(log) {
-    std::set<double> drives;
+    std::set<Drive> drives;
     for (const Measurement& m : spec_.measured) {
-      if (!is_frequency(m.quantity)) drives.insert(m.drive_hz);
+      if (!is_frequency(m.quantity)) drives.insert(drive_of(m));
       if (is_frequency(m.quantity)) frequencies_ = true;
     }
     drives_.assign(drives.begin(), drives.end());
@@ -148,9 +149,11 @@ class Forward {
         const Measurement& measurement = spec_.measured[i];
         double value = kNaN;
         if (!is_frequency(measurement.quantity)) {
-          const std::size_t d = static_cast<std::size_t>(
-              std::lower_bound(drives_.begin(), drives_.end(), measurement.drive_hz) - drives_.begin());
-          value = sweep_value(sweeps[t][d], measurement.quantity, measurement.probe, measurement.drive_hz);
+          const Drive drive = drive_of(measurement);
+          const SweepTable& table = sweeps[t][static_cast<std::size_t>(
+              std::lower_bound(drives_.begin(), drives_.end(), drive) - drives_.begin())];
+          value = drive.subharmonic ? subharmonic_value(table, measurement.probe, drive.hz)
+                                    : sweep_value(table, measurement.quantity, measurement.probe, drive.hz);
         } else {
           const json& pairs = modal[t]["pairs"];
           if (static_cast<std::size_t>(measurement.mode) <= pairs.size()) {
@@ -172,6 +175,15 @@ class Forward {
   int runs() const { return runs_; }
 
  private:
+  /// A drive frequency of the harmonic measurements and its sweep: narrow about it (the period-one
+  /// branch: A1, A2/A1, A3/A1), or wide with stability and the period-two branch (A1/2/A1).
+  struct Drive {
+    double hz = 0.0;
+    bool subharmonic = false;
+    bool operator<(const Drive& other) const { return std::tie(hz, subharmonic) < std::tie(other.hz, other.subharmonic); }
+  };
+  static Drive drive_of(const Measurement& m) { return {m.drive_hz, m.quantity == "A1/2/A1"}; }
+
   /// The modal damping ratio of the scene's Rayleigh damping (MODEL.md eq. 26) at a mode's frequency:
   /// xi = alpha / (2 omega) + beta omega / 2 at the bilinear frequency (the ring-down's) of a paired
   /// mode, else the uncracked one; the damping keys among the unknowns take theta's values; a ratio
@@ -199,7 +211,7 @@ class Forward {
 
   /// One study over the thetas (times the drive frequencies, when given: `crackle sweep` cases);
   /// the case folders in order (theta-major). SolverError names a case that failed.
-  std::vector<fs::path> run_cases(const std::vector<VectorX>& thetas, const std::vector<double>& drives,
+  std::vector<fs::path> run_cases(const std::vector<VectorX>& thetas, const std::vector<Drive>& drives,
                                   const std::vector<int>& orders, const fs::path& folder, bool progress) {
     YAML::Node document = YAML::Clone(base_);
     if (!drives.empty()) {
@@ -217,9 +229,16 @@ class Forward {
     for (std::size_t t = 0; t < thetas.size(); ++t) {
       ForwardCase run{thetas[t], orders.empty() ? 0 : orders[t], {}};
       if (drives.empty()) cases.push_back(run);
-      for (double drive : drives) {
-        run.set = {{"sweep.frequency.from", format_number(drive * (1.0 - kSweepHalfWidth))},
-                   {"sweep.frequency.to", format_number(drive * (1.0 + kSweepHalfWidth))}};
+      for (const Drive& drive : drives) {
+        // Each branch is solved at the drive itself (sweep.solve_at): the value read there does not
+        // move with the continuation's points, which finite differences would see as noise.
+        const double half = drive.subharmonic ? kSubharmonicHalfWidth : kSweepHalfWidth;
+        run.set = {{"sweep.frequency.from", format_number(drive.hz * (1.0 - half))},
+                   {"sweep.frequency.to", format_number(drive.hz * (1.0 + half))},
+                   {"sweep.points", std::to_string(drive.subharmonic ? kSubharmonicPoints : 2)},
+                   {"sweep.stability", drive.subharmonic ? "true" : "false"},
+                   {"sweep.subharmonic", drive.subharmonic ? "2" : "1"},
+                   {"sweep.solve_at", "[" + format_number(drive.hz) + "]"}};
         cases.push_back(run);
       }
     }
@@ -236,7 +255,7 @@ class Forward {
   const IdentifyOptions& options_;
   std::ostream& log_;
   bool frequencies_ = false;    ///< a frequency is measured
-  std::vector<double> drives_;  ///< distinct drive frequencies of the harmonic measurements [Hz]
+  std::vector<Drive> drives_;  ///< distinct drives of the harmonic measurements, sorted
   int runs_ = 0;
 };
 
@@ -245,12 +264,6 @@ class Forward {
 
 const std::vector<std::string>& frequency_quantities() {
   static const std::vector<std::string> names = {"f_uncracked", "f_open", "f_bilinear"};
-  return names;
-}
-
-const std::vector<std::string>& computed_quantities() {
-  static const std::vector<std::string> names = {"f_uncracked", "f_open", "f_bilinear", "damping_ratio",
-                                                 "A1",          "A2/A1",  "A3/A1"};
   return names;
 }
 
@@ -394,10 +407,10 @@ void check_against_scene(const IdentifySpec& spec, const scene::Scene& scene, co
         throw InputError(m.where + ": quantity " + m.quantity + ": expected a scene with a harmonic transient.excitation "
                          "(its load is driven at drive_hz), got " + (scene.transient->excitation ? "a pulse" : "none"));
     }
-    const auto& computed = computed_quantities();
-    if (std::find(computed.begin(), computed.end(), m.quantity) == computed.end())
-      throw InputError(m.where + ": quantity: expected one of " + join(computed) +
-                       " (identify does not compute the period-two branch yet), got '" + m.quantity + "'");
+    if (m.quantity == "A1/2/A1" && scene.contact.friction > 0.0)
+      throw InputError(m.where + ": quantity A1/2/A1: expected a scene without friction (the period-two branch is "
+                       "found by the sweep's stability, which is frictionless), got crack.contact.friction = " +
+                       format_number(scene.contact.friction));
     if (is_frequency(m.quantity) && m.mode > scene.modal.modes)
       throw InputError(m.where + ": mode: expected a mode the scene solves (modal.modes = " +
                        std::to_string(scene.modal.modes) + "), got " + std::to_string(m.mode));

@@ -57,11 +57,9 @@ struct Measurement {
   std::string where;  ///< "file:line" for messages
 };
 
-/// Modal frequencies (per mode); the quantities identify computes (those and the harmonics of a
-/// probe at a drive frequency, by harmonic balance); all that the section accepts (damping_ratio and
-/// A1/2/A1 are checked, then refused as not yet computed).
+/// Modal frequencies (per mode); every quantity the section accepts and identify computes (those,
+/// damping_ratio, and a probe's harmonics at a drive frequency by harmonic balance).
 const std::vector<std::string>& frequency_quantities();
-const std::vector<std::string>& computed_quantities();
 const std::vector<std::string>& all_quantities();
 
 struct IdentifySpec {

@@ -161,6 +161,7 @@ sweep::ContinuationOptions continuation_options(const SweepSettings& settings) {
   continuation.initial_step = continuation.max_step;
   continuation.min_step = std::min(continuation.min_step, 1e-3 * continuation.max_step);
   continuation.max_points = 50 * section.points;
+  for (const double hz : section.solve_at_hz) continuation.solve_at.push_back(kTwoPi * hz);
   return continuation;
 }
 
@@ -269,6 +270,11 @@ SweepResult harmonic_balance_sweep(const reduced::ReducedSystem& system, const S
     }
   }
   add_harmonics_warning(settings, hb.options().top_threshold, recorder.flagged(), recorder.first_flagged_hz(), result);
+  for (const double hz : section.solve_at_hz)
+    if ((hz - settings.from_hz) * (hz - settings.to_hz) > 0.0)
+      result.warnings.push_back("sweep.solve_at: " + format_number(hz) + " Hz lies outside the range " +
+                                format_number(settings.from_hz) + " - " + format_number(settings.to_hz) +
+                                " Hz: no point solved there");
   result.linear_solver = hb.matrix_free() ? "krylov" : "dense";
   result.krylov = hb.krylov_statistics();
   result.solve_s = clock.seconds();

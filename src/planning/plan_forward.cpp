@@ -22,20 +22,6 @@ std::vector<std::string> ratio_quantities(const DriveFrequency& f) {
   return f.subharmonic() ? std::vector<std::string>{"A1/2/A1"} : std::vector<std::string>{"A2/A1", "A3/A1"};
 }
 
-bool period_two_exists(const SweepTable& table, double drive_hz) {
-  const int period = table.column("branch period [excitation periods]");
-  const int stable = table.column("stable [1 yes, 0 no, -1 not computed]");
-  if (period < 0 || stable < 0) return false;
-  for (std::size_t r = 0; r + 1 < table.rows.size(); ++r) {
-    const std::vector<double>&a = table.rows[r], &b = table.rows[r + 1];
-    if (std::lround(a[static_cast<std::size_t>(period)]) != 2 || std::lround(b[static_cast<std::size_t>(period)]) != 2)
-      continue;
-    if ((a[0] - drive_hz) * (b[0] - drive_hz) > 0.0 || a[0] == b[0]) continue;
-    if (a[static_cast<std::size_t>(stable)] == 1.0 && b[static_cast<std::size_t>(stable)] == 1.0) return true;
-  }
-  return false;
-}
-
 namespace {
 
 /// The drive frequencies of the plan against the modes the scene solves and its friction.

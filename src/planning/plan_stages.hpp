@@ -31,10 +31,9 @@ inline constexpr double kInf = std::numeric_limits<double>::infinity();
 inline constexpr double kStep = 1e-4;
 /// Half-width of the narrow sweep about a period-one drive, relative (identify's).
 inline constexpr double kNarrowHalfWidth = 1e-4;
-/// Half-width of the sweep with stability about a sub-harmonic drive, relative: the period-two
-/// branch is born at a period doubling somewhere around 2 f_b; the sweep must find it and follow it.
-inline constexpr double kSubharmonicHalfWidth = 0.15;
-inline constexpr int kSubharmonicPoints = 40;
+using identify::kSubharmonicHalfWidth;  // the sweep about a sub-harmonic drive (identify's)
+using identify::kSubharmonicPoints;
+using identify::period_two_exists;
 /// Detection threshold (DETECTION.md sec. 3) and the 95 % normal quantile of the widths.
 inline constexpr double kDetect = 3.0;
 inline constexpr double kZ95 = 1.959963984540054;
@@ -43,8 +42,6 @@ inline constexpr double kZ95 = 1.959963984540054;
 std::string sensor_name(std::size_t i);
 /// The quantities a candidate measures at its sensor.
 std::vector<std::string> ratio_quantities(const DriveFrequency& f);
-/// The sweep.csv rows around the drive on the period-two branch, both stable.
-bool period_two_exists(const identify::SweepTable& table, double drive_hz);
 
 /// What every stage reads: the plan, its scene, the scene of every forward run (`base`: the plan's
 /// scene with the candidate sensors as probes and the drive a point load) and where they run.

@@ -417,6 +417,10 @@ Param build_parameters() {
              {"auto", "dense", "krylov"}).defaults_to("auto"),
       boolean("plots", "sweep_<probe>.png: each probe's amplitudes against frequency (gnuplot; skipped with a "
                        "note when absent).").defaults_to("true"),
+      number("solve_at", "harmonic_balance: frequencies where every branch is also solved exactly (Newton at "
+                         "that frequency from the two points around it): rows of sweep.csv there, to read a "
+                         "response at a measured drive frequency instead of between two points.")
+          .with_unit("Hz").above(0).list(1, 100),
     }).optional_section(),
   });
   // clang-format on
@@ -826,6 +830,12 @@ SweepSection sweep_from(const Values& values, const Scene& scene) {
   sweep.max_periods = values.integer("sweep.max_periods");
   sweep.solver = values.word("sweep.solver");
   sweep.plots = values.flag("sweep.plots");
+  if (values.has("sweep.solve_at")) {
+    if (sweep.method != "harmonic_balance")
+      values.fail("sweep.solve_at", "sweep.method: harmonic_balance (stepped_sine runs at its own frequencies)",
+                  "sweep.method: " + sweep.method);
+    sweep.solve_at_hz = values.numbers("sweep.solve_at");
+  }
   return sweep;
 }
 
@@ -1059,7 +1069,10 @@ const Param& identify_parameters() {
                            "scene's excitation, damping and sweep settings); damping_ratio per mode: the scene's "
                            "Rayleigh damping (transient.damping, its keys among the unknowns at their values) at the "
                            "mode's bilinear frequency (its ring-down's; the uncracked one for an unpaired mode); "
-                           "A1/2/A1 is accepted and checked, then refused as not yet computed.",
+                           "A1/2/A1: the f/2 sub-harmonic at a drive near 2 f_b, from a sweep with stability over "
+                           "drive_hz +- 15 % (the period-two branch from its period doubling), solved at drive_hz: "
+                           "its value on the stable period-two branch, 0 where only the period-one response is "
+                           "stable there (no sub-harmonic), missing where neither is (frictionless contact only).",
                {"f_uncracked", "f_open", "f_bilinear", "damping_ratio", "A1", "A2/A1", "A3/A1", "A1/2/A1"}).required(),
         integer("mode", "Uncracked mode number (1 = lowest; open modes paired by MAC), for the frequencies.").at_least(1),
         text("probe", "A probe of transient.probes, for the harmonic quantities."),

@@ -199,6 +199,7 @@ struct SweepSection {
   int max_periods = 2000;          ///< stepped_sine: periods per frequency at most
   std::string solver = "auto";     ///< harmonic_balance linear solves: auto | dense | krylov
   bool plots = true;               ///< sweep_<probe>.png (gnuplot)
+  std::vector<double> solve_at_hz; ///< harmonic_balance: frequencies where every branch is solved exactly [Hz]
 };
 
 /// `mesh.box.grading`: where (mode) and how (layers, ratio; auto resolved from the order) the box

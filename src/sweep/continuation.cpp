@@ -2,6 +2,8 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <utility>
+#include <vector>
 
 #include "core/errors.hpp"
 #include "core/interrupt.hpp"
@@ -99,6 +101,31 @@ bool correct(const HarmonicBalance& hb, double omega_ref, const VectorX& y_base,
   return false;
 }
 
+/// The points of options.solve_at strictly between two consecutive points (scaled states y0 and y1,
+/// no fold between them) of a branch, in the branch's order: Newton at each fixed Omega from the
+/// chord; a point that fails or lands farther from the chord than |y1 - y0| is left out.
+std::vector<std::pair<Solution, double>> landed_points(const HarmonicBalance& hb, const ContinuationOptions& options,
+                                                       double omega_ref, const VectorX& y0, const VectorX& y1) {
+  const Index n = hb.n_unknowns();
+  std::vector<std::pair<double, double>> crossings;  // (fraction along the chord, Omega)
+  for (const double omega : options.solve_at) {
+    const double w = omega / omega_ref;
+    if ((w - y0[n]) * (w - y1[n]) < 0.0) crossings.emplace_back((w - y0[n]) / (y1[n] - y0[n]), omega);
+  }
+  std::sort(crossings.begin(), crossings.end());
+  std::vector<std::pair<Solution, double>> points;
+  for (const auto& [fraction, omega] : crossings) {
+    const VectorX chord = (1.0 - fraction) * y0.head(n) + fraction * y1.head(n);
+    try {
+      Solution solution = hb.solve(omega, chord * hb.gap_scale());
+      if ((solution.gaps / hb.gap_scale() - chord).norm() <= (y1 - y0).norm()) points.emplace_back(std::move(solution), fraction);
+    } catch (const SolverError&) {
+      // not solved there: the branch keeps its continued points only
+    }
+  }
+  return points;
+}
+
 }  // namespace
 
 std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega_from, double omega_to,
@@ -163,6 +190,9 @@ std::vector<BranchPoint> continue_branch(const HarmonicBalance& hb, double omega
     VectorX t_new = c.bordered.solve_bordered(t, VectorX::Unit(n + 1, n), kTangentTolerance);
     t_new.normalize();
     if (t_new.dot(t) < 0.0) t_new = -t_new;
+    if (!options.solve_at.empty() && (t[n] > 0.0) == (t_new[n] > 0.0))
+      for (auto& [landed, fraction] : landed_points(hb, options, omega_ref, y, c.y))
+        if (!add_point(std::move(landed), (1.0 - fraction) * t[n] + fraction * t_new[n])) return branch;
     y = c.y;
     t = t_new;
     Solution sol;

@@ -231,6 +231,12 @@ struct ContinuationOptions {
   /// at both: BranchPoint::hill_check says whether it finds the same counts.
   bool hill_at_events = true;
   bool hill_everywhere = false; ///< Hill's method instead of the monodromy at every point (slow: a reference)
+  /// Frequencies [rad/s] where the branch is also solved exactly: where a step crosses one (no fold
+  /// between its ends), Newton at that fixed Omega from the step's chord gives a point, recorded between
+  /// the step's two. A value read there is the solution's own, not an interpolation between points
+  /// whose places move with the step control (a forward model differentiated in its parameters needs
+  /// that). Skipped where Newton fails or lands farther from the chord than the step is long.
+  std::vector<double> solve_at;
 };
 
 /// A point of a branch.

@@ -397,6 +397,41 @@ TEST(Identify, AModelErrorWithALevelMissingIsThreeTimesTheNearestChange) {
   EXPECT_FALSE(alone.verified);
 }
 
+TEST(Identify, ASubharmonicIsReadOnTheStablePeriodTwoBranchElseZeroElseMissing) {
+  // A sweep.csv about a drive of 100 Hz (rows: frequency, stable, branch period, tip A1/2/A1): the
+  // period-one branch, then two segments of the period-two branch (down, then up from its start).
+  using crackle::identify::SweepTable;
+  using crackle::identify::subharmonic_value;
+  const std::string stable = "stable [1 yes, 0 no, -1 not computed]", period = "branch period [excitation periods]";
+  const auto table = [&](std::vector<std::vector<double>> rows) {
+    SweepTable t;
+    t.header = {"excitation frequency [Hz]", stable, period, "tip u_z A1/2/A1 [-]"};
+    t.rows = std::move(rows);
+    return t;
+  };
+  // stable period-two rows around 100 Hz (0.4 Hz apart): interpolated; a row at 100 Hz itself (sweep.solve_at) is read
+  SweepTable t = table({{99.4, 1, 1, 0}, {99.7, 0, 1, 0}, {100.3, 0, 1, 0}, {99.8, 1, 2, 2.0}, {100.2, 1, 2, 4.0}});
+  EXPECT_DOUBLE_EQ(subharmonic_value(t, "tip", 100.0), 3.0);
+  EXPECT_TRUE(crackle::identify::period_two_exists(t, 100.0));
+  t.rows.push_back({100, 1, 2, 3.5});
+  EXPECT_DOUBLE_EQ(subharmonic_value(t, "tip", 100.0), 3.5);
+  // no stable period-two branch at the drive, a stable period-one one: no sub-harmonic (0)
+  t = table({{99.7, 1, 1, 0}, {100.3, 1, 1, 0}, {99.8, 0, 2, 2.0}, {100.2, 0, 2, 4.0}});
+  EXPECT_EQ(subharmonic_value(t, "tip", 100.0), 0.0);
+  EXPECT_FALSE(crackle::identify::period_two_exists(t, 100.0));
+  // neither stable, or the drive outside the rows: missing (NaN), never 0
+  t = table({{99.7, 0, 1, 0}, {100.3, 0, 1, 0}, {99.8, 0, 2, 2.0}, {100.2, 0, 2, 4.0}});
+  EXPECT_TRUE(std::isnan(subharmonic_value(t, "tip", 100.0)));
+  EXPECT_TRUE(std::isnan(subharmonic_value(t, "tip", 200.0)));
+  // the end of one segment and the start of the next (85 -> 115 Hz, further apart than the
+  // continuation's longest step of 0.75 % of the drive) are not neighbours
+  t = table({{99.7, 0, 1, 0}, {100.3, 0, 1, 0}, {85, 1, 2, 1.0}, {115, 1, 2, 1.0}});
+  EXPECT_TRUE(std::isnan(subharmonic_value(t, "tip", 100.0)));
+  EXPECT_FALSE(crackle::identify::period_two_exists(t, 100.0));
+  // a probe the table lacks
+  EXPECT_TRUE(std::isnan(subharmonic_value(t, "root", 100.0)));
+}
+
 TEST(Identify, BadMeasurementsAreRefusedWithFileLineAndColumn) {
   const fs::path dir = scratch("bad");
   const std::string header = "quantity,mode,probe,drive_hz,value,sigma\n";
@@ -409,8 +444,6 @@ TEST(Identify, BadMeasurementsAreRefusedWithFileLineAndColumn) {
       {"f_bilinear,9,,,205.6,0.1\n", "measured.csv:2: mode: expected a mode the scene solves (modal.modes = 5), got 9"},
       {"A2/A1,,hammer,102.9,0.12,0.01\n", "measured.csv:2: probe: expected a probe of the scene's transient.probes, got 'hammer'"},
       {"f_bilinear,1,,,nan,0.1\n", "measured.csv:2: column value: expected a finite number, got 'nan'"},
-      {"A1/2/A1,,tip,102.9,0.001,0.0001\n",
-       "measured.csv:2: quantity: expected one of f_uncracked, f_open, f_bilinear, damping_ratio, A1, A2/A1, A3/A1"},
   };
   for (const Case& c : cases) {
     std::ofstream(dir / "measured.csv") << header << c.rows;
@@ -420,6 +453,16 @@ TEST(Identify, BadMeasurementsAreRefusedWithFileLineAndColumn) {
     EXPECT_NE(result.output.find(c.expected), std::string::npos) << c.rows << result.output;
     EXPECT_FALSE(fs::exists(dir / "out" / "identify.json"));
   }
+  // A sub-harmonic needs the sweep's stability, which is frictionless.
+  std::ofstream(dir / "measured.csv") << header << "A1/2/A1,,tip,206.0,1.5,0.1\n";
+  std::string friction = read_text(identify_scene(dir, (dir / "measured.csv").string(), 3));
+  const std::string region = "  region: {y: [0.0, 0.02], z: [0.0075, 0.01]}\n";
+  friction.insert(friction.find(region) + region.size(), "  contact: {friction: 0.3}\n");
+  std::ofstream(dir / "friction.yaml") << friction;
+  auto refused = crackle("identify " + (dir / "friction.yaml").string() + " -o " + (dir / "out").string());
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("measured.csv:2: quantity A1/2/A1: expected a scene without friction"), std::string::npos)
+      << refused.output;
   // A wrong header, and an unknown key path, name what was expected.
   std::ofstream(dir / "measured.csv") << "quantity,mode,value,sigma\nf_bilinear,1,205.6,0.1\n";
   auto result = crackle("identify " + identify_scene(dir, (dir / "measured.csv").string(), 3).string() + " -o " +

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "cli_testing.hpp"
+#include "identify/forward.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -103,7 +104,14 @@ bool period_one_unstable(const Table& branch, double hz) {
 }
 
 TEST(SweepSubharmonic, PeriodDoublingAndThePeriodTwoBranchMatchTheReducedTransient) {
-  run("sweep", "hb", "");
+  // The reduced transient at 2 f_b first: the sweep solves each branch at its excitation frequency too
+  // (sweep.solve_at), where identify reads A1/2/A1 (identify::subharmonic_value).
+  run("run", "transient", "");
+  const nlohmann::json spectrum = read_json(scratch() / "transient" / "spectrum.json");
+  const double hz = spectrum["excitation_hz"];
+  char solve_at[64];
+  std::snprintf(solve_at, sizeof solve_at, "%.17g", hz);
+  run("sweep", "hb", std::string("--set 'sweep.solve_at=[") + solve_at + "]'");
   const nlohmann::json sweep = read_json(scratch() / "hb" / "sweep.json");
   const Table branch = read_csv(scratch() / "hb" / "sweep.csv");
   const double bilinear = sweep["bilinear_hz"];
@@ -123,10 +131,7 @@ TEST(SweepSubharmonic, PeriodDoublingAndThePeriodTwoBranchMatchTheReducedTransie
   EXPECT_LT(doublings.back(), 2.2);
 
   // (b) the reduced transient at 2 f_b settles on a clear f/2 response; the period-two branch has its A1/2
-  run("run", "transient", "");
-  const nlohmann::json spectrum = read_json(scratch() / "transient" / "spectrum.json");
   ASSERT_TRUE(spectrum["steady_state"]["settled"].get<bool>()) << spectrum["steady_state"].dump();
-  const double hz = spectrum["excitation_hz"];
   const nlohmann::json& indices = spectrum["probes"]["tip"]["indices"];
   EXPECT_GT(indices["A1/2/A1"].get<double>(), 2.0) << indices.dump();
   double transient_half = 0.0;
@@ -137,6 +142,17 @@ TEST(SweepSubharmonic, PeriodDoublingAndThePeriodTwoBranchMatchTheReducedTransie
   std::printf("  %.3f Hz A1/2: period-two branch %.6e, reduced transient %.6e (%+.2e)\n", hz, balance_half,
               transient_half, balance_half / transient_half - 1.0);
   EXPECT_NEAR(balance_half / transient_half, 1.0, 0.05);
+  // identify's reading of the sweep: a row of each branch at the excitation frequency itself (solve_at);
+  // A1/2/A1 on the stable period-two branch there, as the transient's
+  const crackle::identify::SweepTable table = crackle::identify::read_sweep_csv(scratch() / "hb" / "sweep.csv");
+  int at_hz = 0;
+  for (const std::vector<double>& row : table.rows) at_hz += std::abs(row[0] - hz) <= 1e-12 * hz;
+  EXPECT_EQ(at_hz, 2) << "the period-one and the period-two branch each solved at " << solve_at << " Hz";
+  EXPECT_TRUE(crackle::identify::period_two_exists(table, hz));
+  const double identify_ratio = crackle::identify::subharmonic_value(table, "tip", hz);
+  std::printf("  %.3f Hz A1/2/A1: identify's reading %.6f, reduced transient %.6f\n", hz, identify_ratio,
+              indices["A1/2/A1"].get<double>());
+  EXPECT_NEAR(identify_ratio / indices["A1/2/A1"].get<double>(), 1.0, 0.05);
 
   // the stepped sine (reduced transient at each frequency, up then down) shows the f/2 response where
   // the period-two branch is stable and the period-one branch is not

@@ -102,6 +102,11 @@ TEST(SweepScene, BadKeysNameFileAndLine) {
             "sweep.yaml:18: sweep.frequency.from.hz: expected a positive number, got -1");
   EXPECT_EQ(error_of(beam_scene("sweep:\n" + range + "  stability: true\n", "{friction: 0.3}")),
             "sweep.yaml:19: sweep.stability: expected false with friction (Hill's method is frictionless), got true");
+  EXPECT_EQ(error_of(beam_scene("sweep:\n" + range + "  method: stepped_sine\n  solve_at: [100]\n")),
+            "sweep.yaml:20: sweep.solve_at: expected sweep.method: harmonic_balance (stepped_sine runs at its own "
+            "frequencies), got sweep.method: stepped_sine");
+  EXPECT_EQ(error_of(beam_scene("sweep:\n" + range + "  solve_at: [100, -1]\n")).substr(0, 42),
+            "sweep.yaml:19: sweep.solve_at[1]: expected");
 }
 
 /// A few modes with pairs a metre apart (never in contact): a linear body. Outputs: 3 rows.
@@ -174,6 +179,25 @@ TEST(SweepLinear, HarmonicBalanceIsTheReceptance) {
   }
   EXPECT_LT(worst, 1e-10);
   EXPECT_LT(higher, 1e-13);
+
+  // sweep.solve_at: one more point at exactly each frequency inside the range (the receptance there);
+  // one outside the range is a warning, not a silent nothing
+  SweepSettings at = settings;
+  const double inside = 0.7 * f1 + 0.3 * (0.5 * (f1 + f2)), outside = 2.0 * f2;
+  at.section.solve_at_hz = {inside, outside};
+  const SweepResult landed = harmonic_balance_sweep(s, at);
+  EXPECT_EQ(landed.points.size(), result.points.size() + 1);
+  std::size_t found = 0;
+  for (const SweepPoint& point : landed.points) {
+    if (std::abs(point.frequency_hz() - inside) > 1e-12 * inside) continue;
+    ++found;
+    const std::complex<double> expected = receptance(s, 0, point.solution.omega);
+    EXPECT_NEAR(point.solution.amplitude(0, 1.0), std::abs(expected), 1e-10 * std::abs(expected));
+  }
+  EXPECT_EQ(found, 1u);
+  ASSERT_EQ(landed.warnings.size(), 1u);
+  EXPECT_NE(landed.warnings.front().find("sweep.solve_at: " + crackle::format_number(outside) + " Hz lies outside the range"),
+            std::string::npos) << landed.warnings.front();
 }
 
 TEST(SweepLinear, SteppedSineIsTheReceptance) {

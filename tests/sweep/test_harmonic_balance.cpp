@@ -613,6 +613,13 @@ struct DoublingOscillator {
     return options;
   }();
   std::vector<BranchPoint> branch = continue_branch(hb1, 2.0, 2.6, copt);
+  /// The period-two solver with 20 harmonics of Omega/2 (the period-one solver's orders).
+  static HarmonicBalanceOptions period_two_options() {
+    HarmonicBalanceOptions options;
+    options.harmonics = 20;
+    options.subharmonic = 2;
+    return options;
+  }
 };
 
 TEST(Continuation, PeriodDoublingOfABilinearOscillator) {
@@ -762,9 +769,7 @@ TEST(BranchSwitching, ThePeriodTwoStartIsFoundWhereTheOddBlockTurnsSingular) {
   std::size_t doubling = 0;
   while (doubling < branch.size() && !branch[doubling].period_doubling) ++doubling;
   ASSERT_LT(doubling, branch.size());
-  HarmonicBalanceOptions opt2;
-  opt2.harmonics = 20;
-  opt2.subharmonic = 2;
+  const HarmonicBalanceOptions opt2 = DoublingOscillator::period_two_options();
   const HarmonicBalance hb2(s, opt2);
   const std::optional<Solution> start = period_two_start(s, hb1, hb2, branch, copt);
   ASSERT_TRUE(start.has_value());
@@ -790,6 +795,55 @@ TEST(BranchSwitching, ThePeriodTwoStartIsFoundWhereTheOddBlockTurnsSingular) {
   // Before the doubling there is no period-two branch to switch to.
   const std::vector<BranchPoint> stable(branch.begin(), branch.begin() + static_cast<std::ptrdiff_t>(doubling) - 1);
   EXPECT_FALSE(period_two_start(s, hb1, hb2, stable, copt).has_value());
+}
+
+TEST(Continuation, SolveAtRecordsTheFixedFrequencySolutionBetweenTwoSteps) {
+  // The oscillator above. With solve_at, the continued branches (period one, and period two from its
+  // start) hold a point at exactly each requested Omega, between the two continued points around it,
+  // equal to the solution Newton finds there by itself; the interpolation between those two points,
+  // which is what a reader of the branch had before, is off by more.
+  const DoublingOscillator oscillator;
+  const auto& [s, opt1, hb1, copt, branch] = oscillator;
+  ContinuationOptions landing = copt;
+  landing.solve_at = {2.1234, 2.5, 3.0};  // 3.0 lies outside both ranges: no point there
+  const std::vector<BranchPoint> one = continue_branch(hb1, 2.0, 2.6, landing);
+  std::vector<std::size_t> at;
+  for (std::size_t i = 0; i < one.size(); ++i)
+    if (one[i].solution.omega == 2.1234 || one[i].solution.omega == 2.5) at.push_back(i);
+  ASSERT_EQ(at.size(), 2u);
+  EXPECT_EQ(one.size(), branch.size() + 2);  // the continued points are the same ones
+  const Solution direct = hb1.solve(2.1234);
+  EXPECT_NEAR(one[at[0]].solution.amplitude(0, 1.0), direct.amplitude(0, 1.0), 1e-10 * direct.amplitude(0, 1.0));
+  EXPECT_LT(one[at[0] - 1].solution.omega, 2.1234);
+  EXPECT_GT(one[at[0] + 1].solution.omega, 2.1234);
+  EXPECT_TRUE(one[at[0]].stability.stable);   // before the doubling
+  EXPECT_FALSE(one[at[1]].stability.stable);  // after it
+
+  const HarmonicBalance hb2(s, DoublingOscillator::period_two_options());
+  const std::optional<Solution> start = period_two_start(s, hb1, hb2, branch, copt);
+  ASSERT_TRUE(start.has_value());
+  const std::vector<BranchPoint> two = continue_branch(hb2, start->omega, 2.6, landing, ProgressCallback(), &*start);
+  std::size_t i = 0;
+  while (i < two.size() && two[i].solution.omega != 2.5) ++i;
+  ASSERT_LT(i, two.size()) << "no point at Omega = 2.5 on the period-two branch";
+  ASSERT_GT(i, 0u);
+  ASSERT_LT(i + 1, two.size());
+  std::size_t doubling = 0;
+  while (doubling < branch.size() && !branch[doubling].period_doubling) ++doubling;
+  ASSERT_LT(doubling, branch.size());
+  const auto routes =
+      two_routes_to_two_and_a_half(s, hb1, hb2, *start, copt, branch[doubling].solution.gaps.cwiseAbs().maxCoeff());
+  ASSERT_TRUE(routes);
+  const double exact = routes->second.ratios(0).half;
+  const Solution& before = two[i - 1].solution;
+  const Solution& after = two[i + 1].solution;
+  const double w = (2.5 - before.omega) / (after.omega - before.omega);
+  const double between = (1.0 - w) * before.ratios(0).half + w * after.ratios(0).half;
+  std::printf("  Omega = 2.5: A1/2/A1 solved there %.10f, Newton from the critical mode %.10f, interpolated between "
+              "Omega %.4f and %.4f %.10f\n", two[i].solution.ratios(0).half, exact, before.omega, after.omega, between);
+  EXPECT_NEAR(two[i].solution.ratios(0).half, exact, 1e-8 * exact);
+  EXPECT_GT(std::abs(between - exact), 100.0 * std::abs(two[i].solution.ratios(0).half - exact));
+  EXPECT_TRUE(two[i].stability.stable);
 }
 
 }  // namespace
