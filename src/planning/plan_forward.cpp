@@ -222,6 +222,7 @@ SampleSweeps sample_sweeps(PlanRun& run, const PriorGrid& grid, const ModalFigur
   YAML::Node base = YAML::Clone(run.base);
   base["sweep"]["frequency"] = YAML::Load("{from: {mode: 1, ratio: 1}, to: {mode: 1, ratio: 2}}");
   std::vector<ForwardCase> cases;
+  std::vector<double> drives;  // per case: the drive in Hz from the modal stage, NaN where f_b is missing
   // the model error's levels (the middle of the prior at each refinement order) first, then the samples
   for (std::size_t s = 0; s < sweeps.n_levels + grid.n_samples; ++s)
     for (std::size_t p = 0; p < sweeps.n_drives; ++p)
@@ -242,6 +243,17 @@ SampleSweeps sample_sweeps(PlanRun& run, const PriorGrid& grid, const ModalFigur
                        {"sweep.frequency.from.ratio", format_number(ratio * (1.0 - half))},
                        {"sweep.frequency.to.mode", std::to_string(drive.mode)},
                        {"sweep.frequency.to.ratio", format_number(ratio * (1.0 + half))}};
+        // Every branch is solved at the drive in Hz (the run level's f_b at the sample, or in the
+        // middle for a level), so that its value is the solution's own, not an interpolation between
+        // continuation points that move with the sample (docs/benchmarks.md 13.9).
+        const std::size_t m = static_cast<std::size_t>(drive.mode - 1);
+        const std::vector<double>& f_b = is_level ? modal.level_f_b[modal.run_level]
+                                                  : modal.f_b[(s - sweeps.n_levels) * grid.per_sample];
+        const std::vector<double>& f_u = modal.f_u[is_level ? 0 : (s - sweeps.n_levels) * grid.per_sample];
+        const double hz = drive.ratio * (f_b.size() > m ? f_b[m] : kNaN);
+        drives.push_back(hz);
+        const double at = std::isfinite(hz) ? hz : drive.ratio * (f_u.size() > m ? f_u[m] : 1.0);
+        forward.set.emplace_back("sweep.solve_at", "[" + format_number(at) + "]");
         sweep_keys(drive, forward.set);
         cases.push_back(forward);
       }
@@ -258,6 +270,8 @@ SampleSweeps sample_sweeps(PlanRun& run, const PriorGrid& grid, const ModalFigur
     const std::array<double, 2> range = {sweep["settings"]["from_hz"].get<double>(), sweep["settings"]["to_hz"].get<double>()};
     (c < n_level_runs ? sweeps.level_tables : sweeps.tables).push_back(identify::read_sweep_csv(folders[c] / "sweep.csv"));
     (c < n_level_runs ? sweeps.level_ranges : sweeps.ranges).push_back(range);
+    (c < n_level_runs ? sweeps.level_drives : sweeps.drives)
+        .push_back(std::isfinite(drives[c]) ? drives[c] : 0.5 * (range[0] + range[1]));
   }
   largest_first_harmonics(spec, sweeps);
   return sweeps;
@@ -283,7 +297,8 @@ JacobianSweeps jacobian_sweeps(PlanRun& run, const PriorGrid& grid, const Sample
           ForwardCase forward{grid.points[s * grid.per_sample + j], 0, {}};
           forward.set = {{"transient.excitation.point", point_text(spec.drive_points[p])},
                          {"sweep.frequency.from", format_number(range[0])},
-                         {"sweep.frequency.to", format_number(range[1])}};
+                         {"sweep.frequency.to", format_number(range[1])},
+                         {"sweep.solve_at", "[" + format_number(sweeps.drive_hz(a)) + "]"}};
           sweep_keys(spec.frequencies[f], forward.set);
           cases.push_back(forward);
         }

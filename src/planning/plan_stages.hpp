@@ -91,13 +91,16 @@ struct SampleSweeps {
   std::vector<std::size_t> freq_order, freq_rank;
   std::vector<identify::SweepTable> tables, level_tables;
   std::vector<std::array<double, 2>> ranges, level_ranges;  ///< each sweep's range [Hz]
+  /// Each sweep's drive [Hz]: the ratio times the modal stage's f_b there, where the sweep solved
+  /// every branch (sweep.solve_at); the middle of its range where that f_b is missing.
+  std::vector<double> drives, level_drives;
   std::vector<double> largest_a1;  ///< per sample sweep: the largest first harmonic over the sensors
   /// The sweep of sample s, drive point p, frequency f; of level l.
   std::size_t index(std::size_t s, std::size_t p, std::size_t f) const { return (s * n_drives + p) * n_freq + freq_rank[f]; }
   std::size_t level_run(std::size_t l, std::size_t p, std::size_t f) const {
     return ((n_levels - 1 - l) * n_drives + p) * n_freq + freq_rank[f];
   }
-  double drive_hz(std::size_t a) const { return 0.5 * (ranges[a][0] + ranges[a][1]); }
+  double drive_hz(std::size_t a) const { return drives[a]; }
 };
 SampleSweeps sample_sweeps(PlanRun& run, const PriorGrid& grid, const ModalFigures& modal);
 
