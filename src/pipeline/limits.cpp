@@ -108,11 +108,11 @@ void check_memory(const scene::Scene& scene, int matrices, MeshUse use) {
 }
 
 void check_sweep_memory(const scene::Scene& scene, Index rows, Index modes) {
-  if (!scene.sweep || scene.sweep->method != "harmonic_balance") return;
+  if (!scene.sweep || scene.sweep->method != scene::SweepMethod::harmonic_balance) return;
   const scene::SweepSection& section = *scene.sweep;
   sweep::HarmonicBalanceOptions options;
   options.harmonics = section.harmonics;
-  options.solver = sweep::linear_solver_named(section.solver);
+  options.solver = section.solver;
   const bool matrix_free = sweep::HarmonicBalance::selects_matrix_free(options, rows);
   const double needed = sweep::HarmonicBalance::memory_bytes(rows, modes, section.harmonics, matrix_free);
   std::string source;

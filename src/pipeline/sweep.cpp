@@ -140,11 +140,11 @@ class BranchRecorder {
 /// The solver options of a sweep with `harmonics` of the base frequency Omega / nu, driven from
 /// `drive_omega` [rad/s] (the automatic gap scale's dynamic floor).
 sweep::HarmonicBalanceOptions balance_options(const reduced::ReducedSystem& system, int harmonics, int nu,
-                                              const std::string& solver, double drive_omega) {
+                                              LinearSolver solver, double drive_omega) {
   sweep::HarmonicBalanceOptions options;
   options.harmonics = harmonics;
   options.subharmonic = nu;
-  options.solver = sweep::linear_solver_named(solver);
+  options.solver = solver;
   // The arclength runs in (G / s, Omega / Omega_from): with s the static gap response the many gap
   // harmonics dominate it near a super-harmonic resonance and the frequency creeps (thousands of
   // points). A larger s makes the step mostly frequency (the Newton tolerance is on r / s).

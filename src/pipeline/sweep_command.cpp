@@ -62,7 +62,7 @@ void write_outputs(const fs::path& directory, const SweepResult& result, const S
   for (std::size_t p = 0; p < settings.probes.size(); ++p) {
     plot::PlotOptions plot;
     plot.title = settings.probes[p].name + " u_" + axis_name(settings.probes[p].component) + ", " +
-                 settings.section.method;
+                 scene::method_name(settings.section.method);
     const plot::PlotResult drawn = plot_sweep(directory / ("sweep_" + settings.probes[p].name + ".png"), result,
                                                   settings, p, plot);
     if (!drawn.written) out << "note: no plot (" << drawn.note << ")\n";
@@ -115,7 +115,7 @@ SweepOutcome sweep_scene(const scene::Scene& scene, const SweepCommandOptions& o
   // samples with one active set (tens per period, n_a^3 / 3 each): beyond kStabilityRowLimit rows that
   // outweighs the solve, so the stability is switched off with a note.
   std::string stability_note;
-  if (settings.section.method == "harmonic_balance" && settings.section.stability &&
+  if (settings.section.method == scene::SweepMethod::harmonic_balance && settings.section.stability &&
       reduced.system.n_rows() > kStabilityRowLimit) {
     settings.section.stability = false;
     stability_note = "stability switched off: " + std::to_string(reduced.system.n_rows()) +
@@ -124,7 +124,7 @@ SweepOutcome sweep_scene(const scene::Scene& scene, const SweepCommandOptions& o
                      "pair rows^3 per active set); the points are not classified stable or unstable";
   }
   const SweepProgress line = progress_line(progress, options.progress);
-  SweepResult result = settings.section.method == "stepped_sine"
+  SweepResult result = settings.section.method == scene::SweepMethod::stepped_sine
                                  ? stepped_sine_sweep(reduced.system, settings, line)
                                  : harmonic_balance_sweep(reduced.system, settings, line);
   if (options.progress) progress << "\n";
@@ -132,7 +132,7 @@ SweepOutcome sweep_scene(const scene::Scene& scene, const SweepCommandOptions& o
 
   nlohmann::json document = output::sweep_json(result, file_settings(settings));
   const nlohmann::json stages =
-      output::stages_json({modal_stage, reduction_stage, Stage{"sweep", true, settings.section.method, result.solve_s}});
+      output::stages_json({modal_stage, reduction_stage, Stage{"sweep", true, scene::method_name(settings.section.method), result.solve_s}});
   const Index unknowns = reduced.system.n_rows() * (2 * settings.section.harmonics + 1);
   if (!stability_note.empty()) document["stability_note"] = stability_note;
   document["scene"] = scene.file;

@@ -20,7 +20,7 @@ output::SweepFileSettings file_settings(const SweepSettings& settings) {
   file.bilinear_hz = settings.bilinear_hz;
   file.harmonics = settings.section.harmonics;
   file.subharmonic = settings.section.subharmonic;
-  file.method = settings.section.method;
+  file.method = scene::method_name(settings.section.method);
   file.stability = settings.section.stability;
   file.points = settings.section.points;
   file.tolerance = settings.section.tolerance;

@@ -126,7 +126,7 @@ std::vector<scene::Override> RefinementSweeps::level_overrides(const Setting& se
   // far below the changes the refinements measure; the continuation costs about half.
   // A windowed sweep keeps the scene's points: its windows are short, and the same step as the
   // main sweep's leaves the parabola's sampling out of the difference.
-  if (scene_.sweep->method == "harmonic_balance" && !windowed) {
+  if (scene_.sweep->method == scene::SweepMethod::harmonic_balance && !windowed) {
     levels.push_back({"sweep.points", std::to_string(std::max(10, scene_.sweep->points / 2))});
   }
   // The Floquet multipliers only find period doublings (folds come from the tangent): without one

@@ -820,7 +820,7 @@ SweepSection sweep_from(const Values& values, const Scene& scene) {
   }
   sweep.harmonics = values.integer("sweep.harmonics");
   sweep.subharmonic = values.integer("sweep.subharmonic");
-  sweep.method = values.word("sweep.method");
+  sweep.method = values.word("sweep.method") == "stepped_sine" ? SweepMethod::stepped_sine : SweepMethod::harmonic_balance;
   sweep.stability = values.flag("sweep.stability");
   if (sweep.stability && scene.contact.friction > 0.0) {
     values.fail("sweep.stability", "false with friction (Hill's method is frictionless)", "true");
@@ -828,12 +828,13 @@ SweepSection sweep_from(const Values& values, const Scene& scene) {
   sweep.points = values.integer("sweep.points");
   sweep.tolerance = values.number("sweep.tolerance");
   sweep.max_periods = values.integer("sweep.max_periods");
-  sweep.solver = values.word("sweep.solver");
+  const std::string solver = values.word("sweep.solver");
+  sweep.solver = solver == "dense" ? LinearSolver::dense : solver == "krylov" ? LinearSolver::krylov : LinearSolver::automatic;
   sweep.plots = values.flag("sweep.plots");
   if (values.has("sweep.solve_at")) {
-    if (sweep.method != "harmonic_balance")
+    if (sweep.method != SweepMethod::harmonic_balance)
       values.fail("sweep.solve_at", "sweep.method: harmonic_balance (stepped_sine runs at its own frequencies)",
-                  "sweep.method: " + sweep.method);
+                  "sweep.method: " + method_name(sweep.method));
     sweep.solve_at_hz = values.numbers("sweep.solve_at");
   }
   return sweep;
@@ -1152,6 +1153,10 @@ std::string scene_format_markdown() {
          "`crackle plan scene.yaml -o DIR` ranks candidate sensors, drive points and drive frequencies for the "
          "cracks of the prior (README, \"Test planning\").\n\n" +
          markdown_table(plan_parameters());
+}
+
+std::string method_name(SweepMethod method) {
+  return method == SweepMethod::stepped_sine ? "stepped_sine" : "harmonic_balance";
 }
 
 std::string model_name(TransientModel model) {

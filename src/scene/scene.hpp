@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/choices.hpp"
 #include "core/defaults.hpp"
 #include "core/types.hpp"
 #include "mesh/box.hpp"
@@ -188,16 +189,21 @@ struct SweepFrequencySection {
 };
 
 /// `sweep:` (frequency sweeps by harmonic balance, HYBRID.md §4-5), run by `crackle sweep`.
+/// `sweep.method`: harmonic_balance (continuation of periodic solutions) or stepped_sine (the
+/// reduced transient to steady state at each frequency).
+enum class SweepMethod { harmonic_balance, stepped_sine };
+std::string method_name(SweepMethod method);
+
 struct SweepSection {
   SweepFrequencySection from, to;
   int harmonics = 15;              ///< H: orders 0..H of the base frequency
   int subharmonic = 1;             ///< nu: 1, or 2 for period-doubled branches
-  std::string method = "harmonic_balance";  ///< harmonic_balance | stepped_sine
+  SweepMethod method = SweepMethod::harmonic_balance;
   bool stability = true;           ///< Floquet multipliers at every point, Hill around changes (harmonic_balance)
   int points = 200;                ///< at least this many points (harmonic_balance), or frequencies each way (stepped_sine)
   double tolerance = 1e-6;         ///< stepped_sine: steady when no harmonic changes more than this x A1 over a period
   int max_periods = 2000;          ///< stepped_sine: periods per frequency at most
-  std::string solver = "auto";     ///< harmonic_balance linear solves: auto | dense | krylov
+  LinearSolver solver = LinearSolver::automatic;  ///< harmonic_balance's linear solves (sweep.solver)
   bool plots = true;               ///< sweep_<probe>.png (gnuplot)
   std::vector<double> solve_at_hz; ///< harmonic_balance: frequencies where every branch is solved exactly [Hz]
 };

@@ -15,10 +15,6 @@
 
 namespace crackle::sweep {
 
-LinearSolver linear_solver_named(const std::string& name) {
-  return name == "dense" ? LinearSolver::dense : name == "krylov" ? LinearSolver::krylov : LinearSolver::automatic;
-}
-
 using namespace detail;
 
 

@@ -33,6 +33,7 @@
 #include <string>
 #include <vector>
 
+#include "core/choices.hpp"
 #include "core/types.hpp"
 #include "reduced/system.hpp"
 #include "sweep/krylov.hpp"
@@ -42,15 +43,9 @@ namespace crackle::sweep {
 using ComplexVectorX = Eigen::VectorXcd;
 using ComplexMatrixX = Eigen::MatrixXcd;
 
-/// How the Newton and continuation steps solve with the Jacobian J = I - H dP/dG.
-enum class LinearSolver {
-  automatic,  ///< dense up to HarmonicBalanceOptions::dense_limit unknowns, else krylov
-  dense,      ///< J formed (c(2H+1) square) and LU-factorised: fastest for small problems
-  krylov,     ///< matrix-free GMRES with the pair-block preconditioner (krylov.hpp): no square matrix
-};
-
-/// The solver a scene names (sweep.solver: dense, krylov, anything else auto).
-LinearSolver linear_solver_named(const std::string& name);
+/// How the Newton and continuation steps solve with the Jacobian (core/choices.hpp: the scene's
+/// sweep.solver as it is).
+using crackle::LinearSolver;
 
 /// Options of the harmonic-balance solver.
 struct HarmonicBalanceOptions {

@@ -67,7 +67,8 @@ TEST(SweepScene, DefaultsAndModeRelativeRange) {
   EXPECT_FALSE(sweep.from.hz);
   EXPECT_EQ(sweep.harmonics, 15);
   EXPECT_EQ(sweep.subharmonic, 1);
-  EXPECT_EQ(sweep.method, "harmonic_balance");
+  EXPECT_EQ(sweep.method, scene::SweepMethod::harmonic_balance);
+  EXPECT_EQ(sweep.solver, LinearSolver::automatic);
   EXPECT_TRUE(sweep.stability);
   EXPECT_EQ(sweep.points, 200);
   const std::vector<SweepProbe> probes = sweep_probes(scene);
@@ -80,7 +81,7 @@ TEST(SweepScene, DefaultsAndModeRelativeRange) {
   EXPECT_EQ(*hz.sweep->from.hz, 400.0);
   EXPECT_EQ(*hz.sweep->to.hz, 300.0);
   EXPECT_FALSE(hz.sweep->stability);
-  EXPECT_EQ(hz.sweep->method, "stepped_sine");
+  EXPECT_EQ(hz.sweep->method, scene::SweepMethod::stepped_sine);
 }
 
 TEST(SweepScene, BadKeysNameFileAndLine) {
@@ -204,7 +205,7 @@ TEST(SweepLinear, SteppedSineIsTheReceptance) {
   const reduced::ReducedSystem s = linear_system();
   const double f1 = s.omega[0] / kTwoPi;
   SweepSettings settings = settings_for(0.8 * f1, 1.2 * f1, 3, 5);
-  settings.section.method = "stepped_sine";
+  settings.section.method = scene::SweepMethod::stepped_sine;
   settings.section.tolerance = 1e-9;
   const SweepResult result = stepped_sine_sweep(s, settings);
   ASSERT_EQ(result.points.size(), 10u);
@@ -262,7 +263,7 @@ TEST(SweepBilinear, HarmonicBalanceMatchesTheSteppedSine) {
   const reduced::ReducedSystem s = bilinear_oscillator();
   // The stepped sine resolves orders up to 10 (160 steps per period of the 10th); HB at H = 40.
   SweepSettings hb = settings_for(0.46 * kBilinearHz, 0.54 * kBilinearHz, 10, 4);
-  hb.section.method = "stepped_sine";
+  hb.section.method = scene::SweepMethod::stepped_sine;
   hb.section.tolerance = 1e-7;
   hb.section.max_periods = 600;
   const SweepResult stepped = stepped_sine_sweep(s, hb);
@@ -307,7 +308,7 @@ TEST(SweepStability, SteppedSineJumpsWhereTheBranchFoldsAndTheMiddleIsUnstable) 
   const double from = 1.0 / kTwoPi, to = 1.3 / kTwoPi;
   constexpr std::size_t kSteps = 21;  // 0.015 rad/s apart
   SweepSettings stepped = settings_for(from, to, 3, kSteps);  // A1 only: a coarser step
-  stepped.section.method = "stepped_sine";
+  stepped.section.method = scene::SweepMethod::stepped_sine;
   stepped.section.tolerance = 1e-5;
   stepped.section.max_periods = 3000;
   const SweepResult lab = stepped_sine_sweep(s, stepped);
@@ -392,7 +393,7 @@ TEST(SweepStability, PeriodDoublingAndTheSubharmonicBranchMatchTheSteppedSine) {
   ASSERT_GT(period_two, 5u);
   // the stepped sine (the reduced transient to steady state) at 2.5 rad/s, started from 2.45
   SweepSettings stepped = settings_for(2.45 / kTwoPi, 2.5 / kTwoPi, 6, 2);  // orders up to 3: a coarser step
-  stepped.section.method = "stepped_sine";
+  stepped.section.method = scene::SweepMethod::stepped_sine;
   stepped.section.subharmonic = 2;
   stepped.section.tolerance = 1e-7;
   stepped.section.max_periods = 2000;
