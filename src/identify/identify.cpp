@@ -205,7 +205,7 @@ class Forward {
       at_hz = pairs[static_cast<std::size_t>(damping.at_mode - 1)]["f_uncracked_hz"].get<double>();
     }
     const transient::RayleighDamping rayleigh = transient::stated_damping(
-        damping.ratio, damping.type == "stiffness", at_hz, damping.alpha, damping.beta);
+        damping.ratio, damping.type == scene::DampingType::stiffness, at_hz, damping.alpha, damping.beta);
     return transient::damping_ratio(rayleigh, 2.0 * M_PI * f_hz);
   }
 

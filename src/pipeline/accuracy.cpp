@@ -30,12 +30,12 @@ EstimatePlan accuracy_plan(const scene::Scene& scene, const RunRoute& route) {
     return plan;
   }
   const scene::AccuracySection& accuracy = scene.accuracy;
-  if (accuracy.estimate == "off") {
+  if (accuracy.estimate == scene::EstimateChoice::off) {
     plan.reason = "accuracy.estimate: off";
     return plan;
   }
   if (route.model != "reduced") {  // RunRoute::model: the word run.json writes
-    if (accuracy.estimate == "on") {
+    if (accuracy.estimate == scene::EstimateChoice::on) {
       throw InputError(scene.where("accuracy.estimate") + ": expected auto or off with transient.model: full (each "
                        "refinement run of the full model costs as much as the run or more; transient.model: auto or "
                        "reduced estimates the signature), got on");

@@ -86,7 +86,7 @@ ModalLevelPlan modal_level_plan(const scene::Scene& scene, int ranks) {
   ModalLevelPlan plan;
   const scene::AccuracySection& accuracy = scene.accuracy;
   plan.tolerance = accuracy.tolerance;
-  if (accuracy.estimate == "off") {
+  if (accuracy.estimate == scene::EstimateChoice::off) {
     plan.reason = "accuracy.estimate: off";
     return plan;
   }
@@ -102,7 +102,7 @@ ModalLevelPlan modal_level_plan(const scene::Scene& scene, int ranks) {
   plan.run_order = order;
   if (order >= 3) {
     for (int level = std::max(2, order - 2); level <= order; ++level) plan.orders.push_back(level);
-  } else if (accuracy.estimate == "on" || accuracy.tolerance) {
+  } else if (accuracy.estimate == scene::EstimateChoice::on || accuracy.tolerance) {
     for (int level = order; level <= std::min(kHighestOrder, order + 2); ++level) plan.orders.push_back(level);
   } else {
     plan.reason = "element order " + std::to_string(order) +

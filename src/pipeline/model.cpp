@@ -21,8 +21,9 @@ constexpr double kRegionTolerance = 1e-9;
 }  // namespace
 
 mesh::Grading box_grading(const scene::Scene& scene, MeshUse use) {
-  const std::string& mode = scene.grading.mode;
-  if (mode == "none" || (mode == "auto" && use == MeshUse::transient)) return mesh::Grading{};
+  const scene::GradingMode mode = scene.grading.mode;
+  if (mode == scene::GradingMode::none || (mode == scene::GradingMode::automatic && use == MeshUse::transient))
+    return mesh::Grading{};
   return scene.grading.grading;
 }
 

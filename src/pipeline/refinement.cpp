@@ -227,7 +227,7 @@ void add_to_summary(const accuracy::Estimate& estimate, SettingSummary& summary)
 
 RefinementChoice mesh_choice(const Setting& setting, const scene::Scene& scene, double cost) {
   RefinementChoice choice{"mesh", finer_mesh(setting), cost, ""};
-  if (choice.next.layers > 0 && scene.grading.mode != "always") {
+  if (choice.next.layers > 0 && scene.grading.mode != scene::GradingMode::always) {
     choice.blocked = "mesh (the highest element order, " + std::to_string(kHighestOrder) +
                      ", is reached on a mesh that is not graded: finer cells, mesh.box.cells, or mesh.box.grading: "
                      "always, whose front layers the refinement adds)";

@@ -39,7 +39,7 @@ double graded_dofs(const scene::Scene& scene, const std::array<int, 3>& cells, i
   scene::Scene graded = scene;
   graded.box.cells = cells;
   graded.box.order = order;
-  graded.grading.mode = "always";
+  graded.grading.mode = scene::GradingMode::always;
   const std::array<std::vector<double>, 3> lines = box_lines(graded, MeshUse::transient);
   double nodes = 1.0;
   for (const std::vector<double>& axis : lines) nodes *= static_cast<double>(axis.size() - 1) * order + 1.0;

@@ -63,7 +63,7 @@ transient::RayleighDamping scene_damping(const scene::Scene& scene, const std::o
                        : damping.at_hz ? *damping.at_hz
                                        : mode_frequency(*modes, damping.at_mode, "uncracked",
                                                         scene.file + ": transient.damping.at.mode");
-  return transient::stated_damping(damping.ratio, damping.type == "stiffness", at_hz, damping.alpha, damping.beta);
+  return transient::stated_damping(damping.ratio, damping.type == scene::DampingType::stiffness, at_hz, damping.alpha, damping.beta);
 }
 
 namespace {

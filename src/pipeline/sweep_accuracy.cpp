@@ -31,11 +31,11 @@ constexpr double kHarmonicsOrder = 0.0;
 EstimatePlan sweep_plan(const scene::Scene& scene, const RunRoute& route) {
   EstimatePlan plan;
   const scene::AccuracySection& accuracy = scene.accuracy;
-  if (accuracy.estimate == "off") {
+  if (accuracy.estimate == scene::EstimateChoice::off) {
     plan.reason = "accuracy.estimate: off";
     return plan;
   }
-  if (accuracy.estimate == "auto" && !route.automatic && !accuracy.tolerance) {
+  if (accuracy.estimate == scene::EstimateChoice::automatic && !route.automatic && !accuracy.tolerance) {
     plan.reason = "the sweep of the scene's mesh as written (" + route.reason.substr(0, route.reason.find(':')) +
                   " not auto): accuracy.estimate: on or an accuracy.tolerance estimates it";
     return plan;

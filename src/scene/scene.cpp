@@ -663,7 +663,7 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
       const std::string given = exactly_one(values, "transient.damping.at", {"hz", "mode"});
       if (given == "hz") damping.at_hz = values.number("transient.damping.at.hz");
       if (given == "mode") damping.at_mode = values.integer("transient.damping.at.mode");
-      damping.type = values.word("transient.damping.type");
+      damping.type = values.word("transient.damping.type") == "stiffness" ? DampingType::stiffness : DampingType::mass;
     } else {
       if (values.has("transient.damping.alpha")) damping.alpha = values.number("transient.damping.alpha");
       if (values.has("transient.damping.beta")) damping.beta = values.number("transient.damping.beta");
@@ -862,7 +862,8 @@ Scene scene_from(const Values& values) {
       const std::string key = "mesh.box.lines." + kAxes[axis];
       if (values.has(key)) scene.box.extra_lines[axis] = values.numbers(key);
     }
-    scene.grading.mode = values.word("mesh.box.grading.mode");
+    const std::string mode = values.word("mesh.box.grading.mode");
+    scene.grading.mode = mode == "always" ? GradingMode::always : mode == "none" ? GradingMode::none : GradingMode::automatic;
     mesh::Grading grading;
     grading.layers = mesh::kAutoLayers;
     if (!values.is_word("mesh.box.grading.layers")) grading.layers = values.integer("mesh.box.grading.layers");
@@ -958,7 +959,8 @@ Scene scene_from(const Values& values) {
       values.fail("accuracy", "a spectrum:, sweep: or modal: section (the accuracy estimates are of their signatures "
                   "and frequencies)", "none");
     }
-    scene.accuracy.estimate = values.word("accuracy.estimate");
+    const std::string estimate = values.word("accuracy.estimate");
+    scene.accuracy.estimate = estimate == "on" ? EstimateChoice::on : estimate == "off" ? EstimateChoice::off : EstimateChoice::automatic;
     scene.accuracy.tolerance = optional_number(values, "accuracy.tolerance");
     scene.accuracy.budget_s = values.number("accuracy.budget");
     scene.accuracy.quantities = values.words("accuracy.quantities");
@@ -1153,6 +1155,10 @@ std::string scene_format_markdown() {
          "`crackle plan scene.yaml -o DIR` ranks candidate sensors, drive points and drive frequencies for the "
          "cracks of the prior (README, \"Test planning\").\n\n" +
          markdown_table(plan_parameters());
+}
+
+std::string grading_mode_name(GradingMode mode) {
+  return mode == GradingMode::always ? "always" : mode == GradingMode::none ? "none" : "auto";
 }
 
 std::string method_name(SweepMethod method) {

@@ -97,11 +97,14 @@ struct ExcitationSection {
 };
 
 /// `transient.damping`: either a ratio at a frequency (or mode) or alpha/beta directly.
+/// `transient.damping.type` of a stated ratio: mass- or stiffness-proportional Rayleigh damping.
+enum class DampingType { mass, stiffness };
+
 struct DampingSection {
   std::optional<double> ratio;
   std::optional<double> at_hz;
   int at_mode = 0;
-  std::string type = "mass";  ///< mass | stiffness
+  DampingType type = DampingType::mass;
   double alpha = 0.0, beta = 0.0;
 };
 
@@ -210,14 +213,21 @@ struct SweepSection {
 
 /// `mesh.box.grading`: where (mode) and how (layers, ratio; auto resolved from the order) the box
 /// mesh is graded towards the crack front. Which commands grade is decided in pipeline::build_model.
+/// `mesh.box.grading.mode`: auto (modal and check graded, run uniform), always, none.
+enum class GradingMode { automatic, always, none };
+std::string grading_mode_name(GradingMode mode);
+
 struct GradingSection {
-  std::string mode = "auto";  ///< auto (modal and check graded, run uniform), always, none
+  GradingMode mode = GradingMode::automatic;
   mesh::Grading grading;
 };
 
 /// `accuracy:`: error estimates of the signatures and a tolerance to reach (DETECTION.md sec. 1).
+/// `accuracy.estimate`: auto (where the route is automatic or a tolerance is asked), on, off.
+enum class EstimateChoice { automatic, on, off };
+
 struct AccuracySection {
-  std::string estimate = "auto";        ///< auto | on | off
+  EstimateChoice estimate = EstimateChoice::automatic;
   std::optional<double> tolerance;      ///< relative; empty: auto (0.01 with transient.model: auto)
   double budget_s = 600.0;              ///< wall time of all runs together [s]
   std::vector<std::string> quantities = {"A1", "A2/A1"};  ///< what the tolerance applies to

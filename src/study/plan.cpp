@@ -508,7 +508,7 @@ std::string shared_grading(const std::vector<scene::Scene>& scenes) {
   std::set<int> layers;
   const scene::Scene* graded = nullptr;
   for (const scene::Scene& s : scenes) {
-    if (!s.gmsh_file.empty() || !s.crack || s.grading.mode == "none") continue;
+    if (!s.gmsh_file.empty() || !s.crack || s.grading.mode == scene::GradingMode::none) continue;
     mesh::BoxSpec box = s.box;
     box.grading = s.grading.grading;
     std::array<std::vector<double>, 3> own = mesh::crack_fronts(box, *s.crack);
@@ -524,7 +524,7 @@ std::string shared_grading(const std::vector<scene::Scene>& scenes) {
   if (per_case.size() < 2) return "";
   // The same mode, ratio and layers in every case (auto layers may differ with the crack: the most).
   const mesh::Grading& grading = graded->grading.grading;
-  std::string text = "{mode: " + graded->grading.mode + ", layers: " + std::to_string(*layers.rbegin()) +
+  std::string text = "{mode: " + scene::grading_mode_name(graded->grading.mode) + ", layers: " + std::to_string(*layers.rbegin()) +
                      ", ratio: " + format_number(grading.ratio) + ", fronts: {";
   std::vector<std::string> axes;
   for (int axis = 0; axis < 3; ++axis) {
@@ -669,7 +669,7 @@ StudyPlan plan_study(const std::string& text, const std::string& file) {
       const scene::Scene case_scene = scene::parse_scene(study_case.scene_text, case_name);
       study_case.has_modal_section = case_scene.has_modal_section;
       const bool automatic = case_scene.transient && case_scene.transient->model == scene::TransientModel::automatic;
-      tolerance = case_scene.accuracy.estimate != "off" && (case_scene.accuracy.tolerance || automatic);
+      tolerance = case_scene.accuracy.estimate != scene::EstimateChoice::off && (case_scene.accuracy.tolerance || automatic);
     } catch (const InputError& error) {
       throw InputError(file + ": study: " + describe_case(study_case, spec.vary.size()) +
                        ": the case scene does not read back: " + error.what());

@@ -67,7 +67,7 @@ TEST(Refinement, TheComponentWithTheLargestErrorPerSecondIsRefinedWithinItsLimit
   Setting layered = here;
   layered.layers = kMostExtraLayers;
   scene::Scene graded;
-  graded.grading.mode = "always";
+  graded.grading.mode = scene::GradingMode::always;
   choices = {mesh_choice(layered, graded, 1.0)};
   EXPECT_FALSE(choose_refinement(choices, summary, 600.0, "none", blocking));
   EXPECT_NE(blocking.find("front layers"), std::string::npos) << blocking;
@@ -141,8 +141,8 @@ TEST(Refinement, TheToleranceLoopRefinesUntilMetOrBlockedOrUnverified) {
 // best choice (not when another component's error per second is larger).
 TEST(Refinement, FrontLayersOnlyOnAGradedBox) {
   scene::Scene graded, uniform;
-  graded.grading.mode = "always";
-  uniform.grading.mode = "none";
+  graded.grading.mode = scene::GradingMode::always;
+  uniform.grading.mode = scene::GradingMode::none;
   Setting setting;
   setting.order = 3;
   EXPECT_TRUE(mesh_choice(setting, uniform, 1.0).blocked.empty());  // an order up needs no grading

@@ -379,11 +379,11 @@ TEST(StudyPlan, ModalCacheKeyIgnoresWhatTheUncrackedModesDoNotDependOn) {
   const StudyPlan accurate = plan_study(run_scene + "accuracy: {estimate: off}\nstudy:\n  vary:\n    crack.gap: [0, 1e-6]\n"
                                                     "  outputs: [spectrum]\n", "b.yaml");
   ASSERT_FALSE(accurate.cases[0].primer_text.empty());
-  EXPECT_EQ(scene::parse_scene(accurate.cases[0].primer_text, "primer.yaml").grading.mode, "none");
+  EXPECT_EQ(scene::parse_scene(accurate.cases[0].primer_text, "primer.yaml").grading.mode, scene::GradingMode::none);
   EXPECT_EQ(accurate.cases[0].modal_key, runs.cases[0].modal_key);
   const StudyPlan both = plan_study(run_scene + "study:\n  vary:\n    crack.gap: [0, 1e-6]\n  outputs: [modal, spectrum]\n",
                                     "b.yaml");
-  EXPECT_EQ(scene::parse_scene(both.cases[0].primer_text, "primer.yaml").grading.mode, "auto");
+  EXPECT_EQ(scene::parse_scene(both.cases[0].primer_text, "primer.yaml").grading.mode, scene::GradingMode::automatic);
   // The spectrum and the sweep (the primer drops both) do not split the cache either: the sweeps of one
   // crack at several drive frequencies share the modes and the reduction.
   const StudyPlan windows = plan_study(run_scene + "study:\n  vary:\n    spectrum.harmonics: [3, 5]\n  outputs: [spectrum]\n",
