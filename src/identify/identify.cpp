@@ -403,7 +403,7 @@ void check_against_scene(const IdentifySpec& spec, const scene::Scene& scene, co
       if (scene.transient)
         for (const auto& probe : scene.transient->probes) found = found || probe.name == m.probe;
       if (!found) throw InputError(m.where + ": probe: expected a probe of the scene's transient.probes, got '" + m.probe + "'");
-      if (!scene.transient->excitation || scene.transient->excitation->kind != "harmonic")
+      if (!scene.transient->excitation || scene.transient->excitation->kind != scene::ExcitationKind::harmonic)
         throw InputError(m.where + ": quantity " + m.quantity + ": expected a scene with a harmonic transient.excitation "
                          "(its load is driven at drive_hz), got " + (scene.transient->excitation ? "a pulse" : "none"));
     }

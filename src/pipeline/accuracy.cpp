@@ -25,7 +25,7 @@ namespace fs = std::filesystem;
 EstimatePlan accuracy_plan(const scene::Scene& scene, const RunRoute& route) {
   EstimatePlan plan;
   const std::optional<scene::ExcitationSection>& excitation = scene.transient->excitation;
-  if (!scene.spectrum || !excitation || excitation->kind != "harmonic") {
+  if (!scene.spectrum || !excitation || excitation->kind != scene::ExcitationKind::harmonic) {
     plan.reason = "no harmonic signature (no spectrum: section or no harmonic excitation)";
     return plan;
   }

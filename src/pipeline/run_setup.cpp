@@ -40,7 +40,7 @@ transient::ExternalLoad excitation_load(const scene::Scene& scene, const Model& 
   }
   load.direction = Vec3::Unit(excitation.direction);
   load.amplitude = excitation.amplitude;
-  if (excitation.kind == "harmonic") {
+  if (excitation.kind == scene::ExcitationKind::harmonic) {
     frequency = excitation.frequency_hz ? *excitation.frequency_hz
                                         : excitation.ratio * mode_frequency(*modes, excitation.mode, excitation.of,
                                                                             scene.file + ": transient.excitation.frequency.mode");
@@ -156,7 +156,7 @@ Index probe_interval(const scene::Scene& scene, double frequency, double dt) {
   if (section.history_samples_per_period <= 0) return 1;
   double period = 0.0;
   if (frequency > 0.0) period = 1.0 / frequency;
-  if (section.excitation && section.excitation->kind == "pulse") period = section.excitation->duration;
+  if (section.excitation && section.excitation->kind == scene::ExcitationKind::pulse) period = section.excitation->duration;
   if (!(period > 0.0)) return 1;
   const double steps = std::floor(period / dt / section.history_samples_per_period);
   return static_cast<Index>(std::clamp(steps, 1.0, 1e9));

@@ -211,7 +211,7 @@ void write_ringdown_spectrum(const scene::Scene& scene, const std::filesystem::p
   const scene::SpectrumSection& spectrum = *scene.spectrum;
   const scene::TransientSection& section = *scene.transient;
   const std::optional<scene::ExcitationSection>& excitation = section.excitation;
-  const bool pulse = excitation && excitation->kind == "pulse";
+  const bool pulse = excitation && excitation->kind == scene::ExcitationKind::pulse;
   const int default_component =
       excitation ? excitation->direction : (section.release && section.release->kind == "static" ? section.release->direction : 2);
   if (history.time.size() < 2) throw SolverError(scene.file + ": spectrum: the run recorded fewer than 2 samples");
@@ -270,7 +270,7 @@ void write_ringdown_spectrum(const scene::Scene& scene, const std::filesystem::p
     probes.push_back(std::move(entry));
   }
   io::write_json(directory / "spectrum.json",
-                 output::ringdown_spectrum_json(pulse ? "pulse" : (excitation ? excitation->kind : "none"), probes,
+                 output::ringdown_spectrum_json(pulse ? "pulse" : (excitation ? scene::excitation_kind_name(excitation->kind) : "none"), probes,
                                                 setup.release ? setup.release->kind : std::string()));
 }
 

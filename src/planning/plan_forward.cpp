@@ -64,7 +64,7 @@ std::string point_text(const Vec3& x) { return list_text({x[0], x[1], x[2]}); }
 }  // namespace
 
 YAML::Node forward_base(const std::string& text, const PlanSpec& spec, const scene::Scene& scene, const std::string& file) {
-  if (!scene.transient || !scene.transient->excitation || scene.transient->excitation->kind != "harmonic")
+  if (!scene.transient || !scene.transient->excitation || scene.transient->excitation->kind != scene::ExcitationKind::harmonic)
     throw InputError(file + ": plan: expected a scene with a harmonic transient.excitation (its direction, amplitude and "
                      "damping drive every candidate; plan.drives moves it), got " +
                      std::string(!scene.transient || !scene.transient->excitation ? "none" : "a pulse"));

@@ -625,9 +625,9 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
     if (where == "point") excitation.point = vec3(values.numbers("transient.excitation.point"));
     excitation.direction = axis_index(values.word("transient.excitation.direction"));
     excitation.amplitude = values.number("transient.excitation.amplitude");
-    excitation.kind = values.word("transient.excitation.kind");
+    excitation.kind = values.word("transient.excitation.kind") == "pulse" ? ExcitationKind::pulse : ExcitationKind::harmonic;
     excitation.ramp_periods = values.number("transient.excitation.ramp_periods");
-    if (excitation.kind == "harmonic") {
+    if (excitation.kind == ExcitationKind::harmonic) {
       if (!values.has("transient.excitation.frequency")) {
         values.fail("transient.excitation.frequency", "a frequency (in Hz, or {mode: n, ratio: r}) for a harmonic "
                     "excitation", "nothing");
@@ -673,7 +673,7 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
   if (lengths.size() != 1) values.fail("transient", "exactly one of periods, duration", and_list(lengths));
   transient.periods = optional_number(values, "transient.periods");
   transient.duration = optional_number(values, "transient.duration");
-  if (transient.periods && !(transient.excitation && transient.excitation->kind == "harmonic")) {
+  if (transient.periods && !(transient.excitation && transient.excitation->kind == ExcitationKind::harmonic)) {
     values.fail("transient.periods", "duration (periods needs a harmonic excitation)", "periods");
   }
   transient.time_step = optional_number(values, "transient.time_step");
@@ -804,7 +804,7 @@ SweepSection sweep_from(const Values& values, const Scene& scene) {
                 "a plain point probe in a scene with sweep: (the sweep's outputs are nearest-node displacements)",
                 "this key");
   }
-  if (!scene.transient || !scene.transient->excitation || scene.transient->excitation->kind != "harmonic") {
+  if (!scene.transient || !scene.transient->excitation || scene.transient->excitation->kind != ExcitationKind::harmonic) {
     values.fail("sweep", "a transient section with a harmonic excitation (its load shape and amplitude are swept)",
                 "none");
   }
@@ -987,7 +987,7 @@ Scene scene_from(const Values& values) {
 std::string reduced_route_refusal(const Scene& scene, int ranks) {
   const TransientSection& transient = *scene.transient;
   if (ranks > 1) return "mpirun -np " + std::to_string(ranks) + " (one transient over several processes is the full model)";
-  if (!transient.excitation || transient.excitation->kind != "harmonic") {
+  if (!transient.excitation || transient.excitation->kind != ExcitationKind::harmonic) {
     return "no harmonic excitation (a pulse or free vibration has content above any retained band)";
   }
   if (!scene.spectrum) return "no spectrum: section (no signature to compute)";
@@ -1155,6 +1155,10 @@ std::string scene_format_markdown() {
          "`crackle plan scene.yaml -o DIR` ranks candidate sensors, drive points and drive frequencies for the "
          "cracks of the prior (README, \"Test planning\").\n\n" +
          markdown_table(plan_parameters());
+}
+
+std::string excitation_kind_name(ExcitationKind kind) {
+  return kind == ExcitationKind::pulse ? "pulse" : "harmonic";
 }
 
 std::string grading_mode_name(GradingMode mode) {

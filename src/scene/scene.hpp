@@ -81,13 +81,17 @@ struct ContactSection {
 };
 
 /// `transient.excitation`.
+/// `transient.excitation.kind`: harmonic (sin(2 pi f t) ramped in) or pulse (an impact-hammer blow).
+enum class ExcitationKind { harmonic, pulse };
+std::string excitation_kind_name(ExcitationKind kind);
+
 struct ExcitationSection {
   std::string face;           ///< box face, or empty
   std::string group;          ///< mesh group, or empty
   std::optional<Vec3> point;  ///< nearest node, or empty
   int direction = 2;          ///< 0, 1, 2 for x, y, z
   double amplitude = 0.0;     ///< total force [N]
-  std::string kind = "harmonic";     ///< harmonic | pulse
+  ExcitationKind kind = ExcitationKind::harmonic;
   std::optional<double> frequency_hz;  ///< given in Hz
   int mode = 0;                      ///< > 0: frequency = ratio * f(mode) of `of`
   double ratio = 1.0;
