@@ -18,13 +18,13 @@ std::vector<mesh::Variant> needed_variants(const scene::Scene& scene, std::strin
   std::set<mesh::Variant> variants;
   const scene::TransientSection& transient = *scene.transient;
   if (transient.excitation && transient.excitation->mode > 0) {
-    const std::string& of = transient.excitation->of;
-    if (of != "open") variants.insert(mesh::Variant::uncracked);
-    if (of != "uncracked") variants.insert(mesh::Variant::open);
+    const scene::ModeOf of = transient.excitation->of;
+    if (of != scene::ModeOf::open) variants.insert(mesh::Variant::uncracked);
+    if (of != scene::ModeOf::uncracked) variants.insert(mesh::Variant::open);
     reason = "transient.excitation.frequency refers to mode " + std::to_string(transient.excitation->mode);
   }
   if (transient.release && transient.release->kind == "mode") {
-    variants.insert(transient.release->variant == "open" ? mesh::Variant::open : mesh::Variant::uncracked);
+    variants.insert(transient.release->variant);
     if (reason.empty()) reason = "transient.release.mode refers to mode " + std::to_string(transient.release->mode);
   }
   if (transient.damping.at_mode > 0) {
@@ -34,8 +34,8 @@ std::vector<mesh::Variant> needed_variants(const scene::Scene& scene, std::strin
   if (scene.sweep) {
     for (const scene::SweepFrequencySection* end : {&scene.sweep->from, &scene.sweep->to}) {
       if (end->mode == 0) continue;
-      if (end->of != "open") variants.insert(mesh::Variant::uncracked);
-      if (end->of != "uncracked") variants.insert(mesh::Variant::open);
+      if (end->of != scene::ModeOf::open) variants.insert(mesh::Variant::uncracked);
+      if (end->of != scene::ModeOf::uncracked) variants.insert(mesh::Variant::open);
       if (reason.empty()) reason = "sweep.frequency refers to mode " + std::to_string(end->mode);
     }
   }
@@ -54,9 +54,9 @@ std::vector<mesh::Variant> needed_variants(const scene::Scene& scene, std::strin
 }
 
 /// Frequency [Hz] of elastic mode `mode` (1-based) of the given kind from a modal result.
-double mode_frequency(const modal::ModalResult& result, int mode, const std::string& of, const std::string& key) {
+double mode_frequency(const modal::ModalResult& result, int mode, scene::ModeOf of, const std::string& key) {
   const int index = mode - 1;
-  if (of == "bilinear") {
+  if (of == scene::ModeOf::bilinear) {
     if (index >= static_cast<int>(result.pairs.size())) {
       throw InputError(key + ": mode " + std::to_string(mode) + " asked, but only " +
                        std::to_string(result.pairs.size()) + " modes were paired (raise modal.modes)");
@@ -71,9 +71,9 @@ double mode_frequency(const modal::ModalResult& result, int mode, const std::str
     return pair.f_bilinear_hz;
   }
   const modal::VariantResult* variant =
-      result.find(of == "open" ? mesh::Variant::open : mesh::Variant::uncracked);
+      result.find(of == scene::ModeOf::open ? mesh::Variant::open : mesh::Variant::uncracked);
   if (!variant || index >= variant->modes.n_modes()) {
-    throw InputError(key + ": mode " + std::to_string(mode) + " of the " + of + " body asked, but only " +
+    throw InputError(key + ": mode " + std::to_string(mode) + " of the " + scene::mode_of_name(of) + " body asked, but only " +
                      std::to_string(variant ? variant->modes.n_modes() : 0) + " modes were computed");
   }
   return variant->modes.frequencies_hz[index];

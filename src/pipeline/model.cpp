@@ -173,7 +173,7 @@ modal::StiffnessFactors& Model::factors() const {
 }
 
 mesh::Variant transient_variant(const scene::Scene& scene, const Model& model) {
-  const bool open = scene.transient && scene.transient->variant == "open" && model.mesh.has_crack();
+  const bool open = scene.transient && scene.transient->variant == mesh::Variant::open && model.mesh.has_crack();
   return open ? mesh::Variant::open : mesh::Variant::uncracked;
 }
 

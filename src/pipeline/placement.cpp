@@ -134,7 +134,7 @@ void check_points(const scene::Scene& scene, const Model& model) {
   if (section.excitation && section.excitation->point) {
     placer.place(*section.excitation->point, "transient.excitation.point");
   }
-  const mesh::Variant variant = section.variant == "open" ? mesh::Variant::open : mesh::Variant::uncracked;
+  const mesh::Variant variant = section.variant;
   const mesh::DofMap& dofs = model.system(variant)->dofs();
   for (std::size_t p = 0; p < section.probes.size(); ++p) place_probe(scene, model, dofs, placer, p, nullptr);
 }

@@ -127,11 +127,11 @@ transient::InitialConditions release_state(const scene::ReleaseSection& release,
     local.n_pairs = springs ? solution.n_pairs : 0;
     local.n_closed = solution.n_closed;
   } else {
-    const mesh::Variant of = release.variant == "open" ? mesh::Variant::open : mesh::Variant::uncracked;
+    const mesh::Variant of = release.variant;
     const modal::VariantResult* result = modes ? modes->find(of) : nullptr;
     if (!result || release.mode > result->modes.n_modes()) {
       throw InputError(where + ": transient.release.mode.number: mode " + std::to_string(release.mode) + " of the " +
-                       release.variant + " body asked, but only " +
+                       mesh::variant_name(release.variant) + " body asked, but only " +
                        std::to_string(result ? result->modes.n_modes() : 0) + " modes were computed");
     }
     const std::vector<double> shape = modal::nodal_shape(mesh, *result, release.mode - 1);

@@ -61,7 +61,7 @@ transient::RayleighDamping scene_damping(const scene::Scene& scene, const std::o
   const scene::DampingSection& damping = scene.transient->damping;
   const double at_hz = !damping.ratio ? 0.0
                        : damping.at_hz ? *damping.at_hz
-                                       : mode_frequency(*modes, damping.at_mode, "uncracked",
+                                       : mode_frequency(*modes, damping.at_mode, scene::ModeOf::uncracked,
                                                         scene.file + ": transient.damping.at.mode");
   return transient::stated_damping(damping.ratio, damping.type == scene::DampingType::stiffness, at_hz, damping.alpha, damping.beta);
 }
@@ -89,7 +89,7 @@ TransientSetup transient_setup(const scene::Scene& scene, const Model& model,
   if (section.excitation) setup.problem.loads.push_back(excitation_load(scene, model, modes, setup.frequency));
   transient::TransientOptions& settings = setup.settings;
   settings.damping = scene_damping(scene, modes);
-  setup.variant = section.variant == "open" ? mesh::Variant::open : mesh::Variant::uncracked;
+  setup.variant = section.variant;
   settings.variant = setup.variant;
   const fem::System& system = *model.system(setup.variant);
   const bool with_contact =

@@ -20,7 +20,7 @@ using Stage = output::Stage;
 
 /// Frequency [Hz] of elastic mode `mode` (1-based) of the given kind (bilinear, uncracked, open)
 /// from a modal result. InputError naming `key` when that mode was not computed or not paired.
-double mode_frequency(const modal::ModalResult& result, int mode, const std::string& of, const std::string& key);
+double mode_frequency(const modal::ModalResult& result, int mode, scene::ModeOf of, const std::string& key);
 
 /// Rayleigh damping of transient.damping: a ratio at a frequency (or a mode of `modes`), or alpha and beta.
 transient::RayleighDamping scene_damping(const scene::Scene& scene, const std::optional<modal::ModalResult>& modes);

@@ -26,7 +26,7 @@ double end_frequency(const scene::Scene& scene, const scene::SweepFrequencySecti
                      const std::optional<modal::ModalResult>& modes, const std::string& key, double& bilinear_hz) {
   if (end.hz) return *end.hz;
   const std::string where = scene.file + ": " + key + ".mode";
-  if (bilinear_hz == 0.0 && scene.has_crack()) bilinear_hz = mode_frequency(*modes, end.mode, "bilinear", where);
+  if (bilinear_hz == 0.0 && scene.has_crack()) bilinear_hz = mode_frequency(*modes, end.mode, scene::ModeOf::bilinear, where);
   return end.ratio * mode_frequency(*modes, end.mode, end.of, where);
 }
 

@@ -428,6 +428,11 @@ Param build_parameters() {
 
 Vec3 vec3(const std::vector<double>& numbers) { return Vec3(numbers[0], numbers[1], numbers[2]); }
 
+/// The `of` word of a mode-relative frequency (a choice of the table: bilinear, uncracked, open).
+ModeOf mode_of_named(const std::string& word) {
+  return word == "bilinear" ? ModeOf::bilinear : word == "open" ? ModeOf::open : ModeOf::uncracked;
+}
+
 /// Two faces share nodes when they are the same face or meet at a box edge.
 bool faces_touch(const std::string& a, const std::string& b) { return a == b || a[0] != b[0]; }
 
@@ -636,9 +641,9 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
       if (given == "hz") excitation.frequency_hz = values.number("transient.excitation.frequency.hz");
       if (given == "mode") excitation.mode = values.integer("transient.excitation.frequency.mode");
       excitation.ratio = values.number("transient.excitation.frequency.ratio");
-      excitation.of = values.word("transient.excitation.frequency.of");
-      if (excitation.of != "uncracked" && !scene.has_crack()) {
-        values.fail("transient.excitation.frequency.of", "uncracked (the scene has no crack)", excitation.of);
+      excitation.of = mode_of_named(values.word("transient.excitation.frequency.of"));
+      if (excitation.of != ModeOf::uncracked && !scene.has_crack()) {
+        values.fail("transient.excitation.frequency.of", "uncracked (the scene has no crack)", mode_of_name(excitation.of));
       }
     } else {
       if (!values.has("transient.excitation.duration")) {
@@ -679,7 +684,7 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
   transient.time_step = optional_number(values, "transient.time_step");
   transient.safety_factor = values.number("transient.safety_factor");
   transient.force_time_step = values.flag("transient.force_time_step");
-  transient.variant = values.word("transient.variant");
+  transient.variant = values.word("transient.variant") == "uncracked" ? mesh::Variant::uncracked : mesh::Variant::open;
   const std::string model = values.word("transient.model");
   transient.model = model == "full" ? TransientModel::full : model == "reduced" ? TransientModel::reduced
                                                                                 : TransientModel::automatic;
@@ -728,9 +733,9 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
       release.amplitude = values.number(load + ".amplitude");
     } else {
       release.mode = values.integer("transient.release.mode.number");
-      release.variant = values.word("transient.release.mode.variant");
+      release.variant = values.word("transient.release.mode.variant") == "open" ? mesh::Variant::open : mesh::Variant::uncracked;
       release.amplitude = values.number("transient.release.mode.amplitude");
-      if (release.variant == "open" && !scene.has_crack()) {
+      if (release.variant == mesh::Variant::open && !scene.has_crack()) {
         values.fail("transient.release.mode.variant", "uncracked (the scene has no crack)", "'open'");
       }
     }
@@ -763,7 +768,7 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
                                              ? 0
                                              : values.integer("transient.history.samples_per_period");
   transient.progress = values.flag("transient.progress");
-  if (transient.variant == "open" && !scene.has_crack()) transient.variant = "uncracked";
+  if (transient.variant == mesh::Variant::open && !scene.has_crack()) transient.variant = mesh::Variant::uncracked;
   return transient;
 }
 
@@ -791,8 +796,9 @@ SweepFrequencySection sweep_end_from(const Values& values, const Scene& scene, c
     end.mode = values.integer(key + ".mode");
   }
   end.ratio = values.number(key + ".ratio");
-  end.of = values.word(key + ".of");
-  if (end.of != "uncracked" && !scene.has_crack()) values.fail(key + ".of", "uncracked (the scene has no crack)", end.of);
+  end.of = mode_of_named(values.word(key + ".of"));
+  if (end.of != ModeOf::uncracked && !scene.has_crack())
+    values.fail(key + ".of", "uncracked (the scene has no crack)", mode_of_name(end.of));
   return end;
 }
 
@@ -991,7 +997,7 @@ std::string reduced_route_refusal(const Scene& scene, int ranks) {
     return "no harmonic excitation (a pulse or free vibration has content above any retained band)";
   }
   if (!scene.spectrum) return "no spectrum: section (no signature to compute)";
-  if (!scene.has_crack() || transient.variant != "open") return "no crack to breathe (a linear run)";
+  if (!scene.has_crack() || transient.variant != mesh::Variant::open) return "no crack to breathe (a linear run)";
   if (scene.contact.model != "penalty") return "crack.contact.model: none (a linear run)";
   if (transient.time_step) return "an explicit transient.time_step";
   if (!transient.initial.empty()) return "transient.initial fields (the full model takes them as given)";
@@ -1155,6 +1161,10 @@ std::string scene_format_markdown() {
          "`crackle plan scene.yaml -o DIR` ranks candidate sensors, drive points and drive frequencies for the "
          "cracks of the prior (README, \"Test planning\").\n\n" +
          markdown_table(plan_parameters());
+}
+
+std::string mode_of_name(ModeOf of) {
+  return of == ModeOf::bilinear ? "bilinear" : of == ModeOf::open ? "open" : "uncracked";
 }
 
 std::string excitation_kind_name(ExcitationKind kind) {

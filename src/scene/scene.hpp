@@ -81,6 +81,11 @@ struct ContactSection {
 };
 
 /// `transient.excitation`.
+/// Whose mode a frequency `{mode: n, ratio: r}` is relative to (`of`): the bilinear frequency of a
+/// paired mode, the uncracked body's or the open body's.
+enum class ModeOf { bilinear, uncracked, open };
+std::string mode_of_name(ModeOf of);
+
 /// `transient.excitation.kind`: harmonic (sin(2 pi f t) ramped in) or pulse (an impact-hammer blow).
 enum class ExcitationKind { harmonic, pulse };
 std::string excitation_kind_name(ExcitationKind kind);
@@ -95,7 +100,7 @@ struct ExcitationSection {
   std::optional<double> frequency_hz;  ///< given in Hz
   int mode = 0;                      ///< > 0: frequency = ratio * f(mode) of `of`
   double ratio = 1.0;
-  std::string of = "uncracked";      ///< bilinear | uncracked | open
+  ModeOf of = ModeOf::uncracked;
   double ramp_periods = 3.0;
   double duration = 0.0;             ///< pulse [s]
 };
@@ -136,7 +141,7 @@ struct ReleaseSection {
   int direction = 2;          ///< static: 0, 1, 2 for x, y, z
   double amplitude = 0.0;     ///< static: total force [N]; mode: largest nodal displacement [m]
   int mode = 0;               ///< mode: elastic mode number (1-based)
-  std::string variant = "uncracked";  ///< mode: uncracked | open
+  mesh::Variant variant = mesh::Variant::uncracked;  ///< mode: of the uncracked or the open body
 };
 
 /// `transient:` (issue 4).
@@ -161,7 +166,7 @@ struct TransientSection {
   std::optional<double> time_step;  ///< [s]; empty: auto
   double safety_factor = defaults::kSafetyFactor;
   bool force_time_step = false;
-  std::string variant = "open";
+  mesh::Variant variant = mesh::Variant::open;  ///< transient.variant (uncracked where the scene has no crack)
   TransientModel model = TransientModel::automatic;  ///< transient.model (pipeline/route.hpp chooses auto's)
   ReducedSection reduced;
   std::vector<ProbeSection> probes;
@@ -192,7 +197,7 @@ struct SweepFrequencySection {
   std::optional<double> hz;        ///< given in Hz
   int mode = 0;                    ///< > 0: ratio * f(mode) of `of`
   double ratio = 1.0;
-  std::string of = "uncracked";    ///< bilinear | uncracked | open
+  ModeOf of = ModeOf::uncracked;
 };
 
 /// `sweep:` (frequency sweeps by harmonic balance, HYBRID.md §4-5), run by `crackle sweep`.

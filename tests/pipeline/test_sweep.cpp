@@ -63,7 +63,7 @@ TEST(SweepScene, DefaultsAndModeRelativeRange) {
   EXPECT_EQ(sweep.from.mode, 1);
   EXPECT_EQ(sweep.from.ratio, 0.45);
   EXPECT_EQ(sweep.to.ratio, 0.55);
-  EXPECT_EQ(sweep.from.of, "bilinear");
+  EXPECT_EQ(sweep.from.of, scene::ModeOf::bilinear);
   EXPECT_FALSE(sweep.from.hz);
   EXPECT_EQ(sweep.harmonics, 15);
   EXPECT_EQ(sweep.subharmonic, 1);
