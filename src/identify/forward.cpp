@@ -457,4 +457,10 @@ double subharmonic_value(const SweepTable& table, const std::string& probe, doub
   return kNaN;
 }
 
+double harmonic_value(const SweepTable& table, const std::string& quantity, const std::string& probe, double drive_hz,
+                      int branch_period) {
+  return quantity == "A1/2/A1" ? subharmonic_value(table, probe, drive_hz)
+                               : sweep_value(table, quantity, probe, drive_hz, branch_period);
+}
+
 }  // namespace crackle::identify

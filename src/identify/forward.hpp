@@ -110,6 +110,11 @@ bool period_two_exists(const SweepTable& table, double drive_hz);
 /// the sweep knows) or the table does not reach the drive.
 double subharmonic_value(const SweepTable& table, const std::string& probe, double drive_hz);
 
+/// A harmonic quantity of a probe at the drive as identify and plan read it: A1/2/A1 by
+/// subharmonic_value, the others by sweep_value on the branch of `branch_period`.
+double harmonic_value(const SweepTable& table, const std::string& quantity, const std::string& probe, double drive_hz,
+                      int branch_period = 1);
+
 /// The mesh orders of the model-error estimate of a forward model run at order p: {min(p, 2),
 /// +1, +2} (identify's and plan's; DETECTION.md sec. 1, the p-refinement of MODEL.md's elements).
 std::vector<int> refinement_orders(int p);

@@ -152,8 +152,7 @@ class Forward {
           const Drive drive = drive_of(measurement);
           const SweepTable& table = sweeps[t][static_cast<std::size_t>(
               std::lower_bound(drives_.begin(), drives_.end(), drive) - drives_.begin())];
-          value = drive.subharmonic ? subharmonic_value(table, measurement.probe, drive.hz)
-                                    : sweep_value(table, measurement.quantity, measurement.probe, drive.hz);
+          value = harmonic_value(table, measurement.quantity, measurement.probe, drive.hz);
         } else {
           const json& pairs = modal[t]["pairs"];
           if (static_cast<std::size_t>(measurement.mode) <= pairs.size()) {

@@ -12,14 +12,6 @@
 namespace crackle::planning::detail {
 namespace {
 
-/// A quantity of a sensor at the drive on the branch of `branch` periods; A1/2/A1 on the stable
-/// period-two branch only (identify::subharmonic_value: 0 where only period one is stable there).
-double ratio_value(const identify::SweepTable& table, const std::string& quantity, const std::string& sensor,
-                   double drive_hz, int branch) {
-  return quantity == "A1/2/A1" ? identify::subharmonic_value(table, sensor, drive_hz)
-                               : sweep_value(table, quantity, sensor, drive_hz, branch);
-}
-
 /// The relative model error of a quantity of a sensor under drive p, frequency f (identify's
 /// p-refinement over the level sweeps in the middle of the prior).
 identify::RefinementError ratio_error(const PlanSpec& spec, const ModalFigures& modal, const SampleSweeps& sweeps,
@@ -28,7 +20,7 @@ identify::RefinementError ratio_error(const PlanSpec& spec, const ModalFigures& 
   std::vector<double> q(sweeps.n_levels);
   for (std::size_t l = 0; l < sweeps.n_levels; ++l) {
     const std::size_t r = sweeps.level_run(l, p, f);
-    q[l] = ratio_value(sweeps.level_tables[r], quantity, sensor, sweeps.level_drives[r], branch);
+    q[l] = identify::harmonic_value(sweeps.level_tables[r], quantity, sensor, sweeps.level_drives[r], branch);
   }
   return identify::refinement_error(q[0], q[1], q[2], static_cast<int>(modal.run_level));
 }
@@ -72,7 +64,7 @@ SampleFigures sample_figures(const PlanSpec& spec, const PriorGrid& grid, const 
   const std::vector<std::string> quantities = ratio_quantities(drive);
   for (std::size_t qi = 0; qi < quantities.size(); ++qi) {
     const std::string& q = quantities[qi];
-    const double v0 = ratio_value(sweeps.tables[a], q, name, drive_hz, branch);
+    const double v0 = identify::harmonic_value(sweeps.tables[a], q, name, drive_hz, branch);
     figures.values.push_back(v0);
     if (!std::isfinite(v0)) {
       figures.sigmas.push_back(kNaN);
@@ -86,7 +78,7 @@ SampleFigures sample_figures(const PlanSpec& spec, const PriorGrid& grid, const 
     figures.sigmas.push_back(sigma);
     figures.noise_sigmas.push_back(std::hypot(spec.noise_ratio * v0, floor_m / a1));
     for (std::size_t j = 1; j <= k; ++j) {
-      const double v = ratio_value(jacobian.table(s, j, c.drive, c.frequency), q, name, drive_hz, branch);
+      const double v = identify::harmonic_value(jacobian.table(s, j, c.drive, c.frequency), q, name, drive_hz, branch);
       row[static_cast<Eigen::Index>(j - 1)] = (v - v0) / step_of(grid, s, j) / sigma;
     }
     if (!row.allFinite()) {
