@@ -238,7 +238,7 @@ int main(int argc, char** argv) {
   modal_command->add_option("--modes", modal.modes, "Number of modes (overrides modal.modes)")
       ->check(above(0, true, "a positive integer"));
   modal_command->add_option("--solver", modal.solver, "auto, slepc or arpack (overrides modal.solver)")
-      ->check(CLI::IsMember({"auto", "slepc", "arpack"}));
+      ->check(CLI::IsMember(texts_of(scene::kModalSolverWords)));
   modal_command->add_option("--modal-cache", modal.modal_cache,
                             "Folder where the modal solves (by fingerprint of K and M) and the reduced model are looked up and stored (shared by study cases)");
   modal_command->add_flag("--overwrite", modal.overwrite,

@@ -24,6 +24,7 @@
 ///   a cost of steps that grows as sqrt(eps_N).
 #include <vector>
 
+#include "core/choices.hpp"
 #include "core/defaults.hpp"
 #include "core/types.hpp"
 #include "fem/assembly.hpp"
@@ -46,10 +47,8 @@ inline constexpr double kDefaultExplicitPenaltyFactor = defaults::kExplicitPenal
 /// (and at 10 x on the deep beam) still diverge; with 4 every energy error stays below 6e-3.
 inline constexpr double kExplicitSpringResolution = 4.0;
 
-enum class ContactIntegration {
-  implicit,         ///< penalty law at U(i+1), closed form per pair (default)
-  explicit_forces,  ///< penalty law at U(i); the springs limit the stable time step
-};
+/// implicit (penalty law at U(i+1), the default) or explicit_forces (at U(i)): core/choices.hpp.
+using crackle::ContactIntegration;
 
 /// Options of the crack-face contact (the scene's `contact:` settings).
 struct ContactOptions {

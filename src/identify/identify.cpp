@@ -368,9 +368,10 @@ IdentifySpec parse_identify_section(const std::string& text, const std::string& 
   }
   if (const YAML::Node sigma = section["sigma"]) {
     const std::string word = sigma.Scalar();
-    if (word != "scaled" && word != "trusted")
-      fail(file, scene::mark_line(sigma), "identify.sigma", "one of scaled, trusted", "'" + word + "'");
-    spec.scale_by_fit = word == "scaled";
+    const std::optional<bool> scaled = value_of(scene::kScaledSigmaWords, word);
+    if (!scaled)
+      fail(file, scene::mark_line(sigma), "identify.sigma", "one of " + join(texts_of(scene::kScaledSigmaWords)), "'" + word + "'");
+    spec.scale_by_fit = *scaled;
   }
   if (const YAML::Node truth = section["truth"]) {
     const int line = scene::mark_line(truth);

@@ -101,10 +101,6 @@ std::vector<int> face_local_nodes(ElementShape shape, int order, int local_face)
   return result;
 }
 
-const char* variant_name(Variant variant) {
-  return variant == Variant::uncracked ? "uncracked" : "open";
-}
-
 DofMap make_dof_map(const Mesh& mesh, Variant variant) {
   DofMap map;
   map.dof_node.resize(mesh.nodes.size());

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/types.hpp"
+#include "core/words.hpp"
 
 namespace crackle::mesh {
 
@@ -105,7 +106,9 @@ enum class Variant {
   uncracked,  ///< each crack pair tied into one set of DOFs
   open,       ///< crack faces free
 };
-const char* variant_name(Variant variant);
+/// The scene's words for the variants (modal.variants, transient.variant, a release's mode).
+inline constexpr Words<Variant, 2> kVariantWords{{{"uncracked", Variant::uncracked}, {"open", Variant::open}}};
+inline const char* variant_name(Variant variant) { return text_of(kVariantWords, variant); }
 
 /// Map from mesh nodes to DOF nodes (3 DOFs each, interleaved x, y, z) for one variant.
 /// For `open` it is the identity; for `uncracked` each duplicated crack node maps to its original,

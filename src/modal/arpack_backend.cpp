@@ -183,16 +183,6 @@ EigenPairs solve_eigenpairs_arpack(const SparseMatrix& stiffness, const SparseMa
   return result;
 }
 
-const char* solver_name(Solver solver) { return solver == Solver::slepc ? "slepc" : "arpack"; }
-
-const char* factorization_name(Factorization factorization) {
-  switch (factorization) {
-    case Factorization::cholmod: return "cholmod";
-    case Factorization::mumps: return "mumps";
-    default: return "automatic";
-  }
-}
-
 EigenPairs solve_eigenpairs(const SparseMatrix& stiffness, const SparseMatrix& mass,
                             const EigenOptions& options) {
   if (stiffness.rows() != stiffness.cols() || mass.rows() != mass.cols() ||

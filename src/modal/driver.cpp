@@ -18,39 +18,12 @@
 
 namespace crackle::modal {
 
-namespace {
-
-template <typename Value>
-Value parse_name(const std::string& name, const std::string& key,
-                 std::initializer_list<std::pair<const char*, Value>> choices) {
-  std::string accepted;
-  for (const auto& [text, value] : choices) {
-    if (name == text) return value;
-    accepted += (accepted.empty() ? "" : ", ") + std::string(text);
-  }
-  throw InputError(key + ": expected one of " + accepted + ", got '" + name + "'");
-}
-
-}  // namespace
-
-Solver parse_solver(const std::string& name, const std::string& key) {
-  return parse_name<Solver>(name, key, {{"slepc", Solver::slepc}, {"arpack", Solver::arpack}});
-}
-
 Factorization parse_factorization(const std::string& name, const std::string& key) {
-  return parse_name<Factorization>(name, key,
-                                   {{"automatic", Factorization::automatic},
-                                    {"cholmod", Factorization::cholmod},
-                                    {"mumps", Factorization::mumps}});
+  return parse_word(kFactorizationWords, name, key);
 }
 
 MacWeighting parse_mac_weighting(const std::string& name, const std::string& key) {
-  return parse_name<MacWeighting>(name, key, {{"mass", MacWeighting::mass}, {"plain", MacWeighting::plain}});
-}
-
-mesh::Variant parse_variant(const std::string& name, const std::string& key) {
-  return parse_name<mesh::Variant>(name, key,
-                                   {{"uncracked", mesh::Variant::uncracked}, {"open", mesh::Variant::open}});
+  return parse_word(kMacWeightingWords, name, key);
 }
 
 const VariantResult* ModalResult::find(mesh::Variant variant) const {

@@ -14,6 +14,7 @@
 
 #include "core/mpi_session.hpp"
 #include "core/types.hpp"
+#include "core/words.hpp"
 
 namespace crackle::linalg {
 class CholmodFactor;
@@ -23,8 +24,9 @@ namespace crackle::modal {
 
 using linalg::CholmodFactor;
 
-/// Eigen-solver backend.
+/// Eigen-solver backend (the scene's modal.solver adds auto: pipeline/modal_command.cpp resolves it).
 enum class Solver { slepc, arpack };
+inline constexpr Words<Solver, 2> kSolverWords{{{"slepc", Solver::slepc}, {"arpack", Solver::arpack}}};
 
 /// Sparse direct Cholesky used by the SLEPc backend.
 enum class Factorization {
@@ -32,9 +34,14 @@ enum class Factorization {
   cholmod,
   mumps,
 };
+inline constexpr Words<Factorization, 3> kFactorizationWords{{{"automatic", Factorization::automatic},
+                                                              {"cholmod", Factorization::cholmod},
+                                                              {"mumps", Factorization::mumps}}};
 
-const char* solver_name(Solver solver);
-const char* factorization_name(Factorization factorization);
+inline const char* solver_name(Solver solver) { return text_of(kSolverWords, solver); }
+inline const char* factorization_name(Factorization factorization) {
+  return text_of(kFactorizationWords, factorization);
+}
 
 /// What one raw eigen-solve is asked to do.
 struct EigenOptions {

@@ -30,6 +30,7 @@ enum class MacWeighting {
   mass,   ///< MAC = (a^T M b)^2 / ((a^T M a)(b^T M b)), M the uncracked mass (default)
   plain,  ///< MAC = (a^T b)^2 / ((a^T a)(b^T b))
 };
+inline constexpr Words<MacWeighting, 2> kMacWeightingWords{{{"mass", MacWeighting::mass}, {"plain", MacWeighting::plain}}};
 
 struct ModalOptions {
   int modes = defaults::kModes;  ///< ELASTIC modes per variant (rigid-body modes are found in addition)
@@ -95,12 +96,10 @@ struct ModeSet {
   int n_modes() const { return static_cast<int>(frequencies_hz.size()); }
 };
 
-/// Solver, factorisation, weighting and variant from their names ("slepc", "cholmod", "mass",
-/// "uncracked", ...); InputError naming `key` and the accepted values otherwise.
-Solver parse_solver(const std::string& name, const std::string& key = "modal.solver");
+/// Factorisation and weighting from their names ("cholmod", "mass", ...); InputError naming `key`
+/// and the accepted values otherwise.
 Factorization parse_factorization(const std::string& name, const std::string& key = "modal.factorization");
 MacWeighting parse_mac_weighting(const std::string& name, const std::string& key = "modal.mac");
-mesh::Variant parse_variant(const std::string& name, const std::string& key = "modal.variants");
 
 /// Solves K phi = omega^2 M phi (K, M over free DOFs) for `options.modes` elastic modes plus the
 /// rigid-body ones. `n_rigid_expected` rigid modes are requested in addition; if more zero-energy

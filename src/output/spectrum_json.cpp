@@ -4,6 +4,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "spectral/window.hpp"
+
 namespace crackle::output {
 namespace {
 
@@ -88,7 +90,7 @@ nlohmann::json ringdown_json(const spectral::RingdownAnalysis& analysis) {
             {"amplitude", amplitudes}}}};
 }
 
-nlohmann::json spectrum_json(double excitation_hz, const std::vector<ProbeTable>& probes,
+nlohmann::json spectrum_json(double excitation_hz, const std::vector<ProbeTable>& probes, spectral::Window amplitude_window,
                              const spectral::SteadyState& state, int window_periods) {
   nlohmann::json probes_json = nlohmann::json::object();
   for (const ProbeTable& probe : probes) probes_json[probe.name] = probe_json(probe.component, probe.table);
@@ -99,6 +101,8 @@ nlohmann::json spectrum_json(double excitation_hz, const std::vector<ProbeTable>
       {"probes", probes_json},
       {"steady_state", steady_state_json(state)}};
   document["steady_state"]["window_periods"] = window_periods;
+  document["amplitude_spectrum"] = {{"window", spectral::window_name(amplitude_window)},
+                                    {"files", "spectrum_<probe>.csv (frequency [Hz], peak amplitude)"}};
   return document;
 }
 

@@ -43,9 +43,10 @@ struct ProbeTable {
 };
 
 /// spectrum.json of a harmonic run: `{"excitation_hz", "amplitude_convention", "probes": {name:
-/// probe_json}, "steady_state": {steady_state_json, "window_periods"}}` (the pipeline adds the
-/// accuracy block).
-nlohmann::json spectrum_json(double excitation_hz, const std::vector<ProbeTable>& probes,
+/// probe_json}, "steady_state": {steady_state_json, "window_periods"}, "amplitude_spectrum":
+/// {"window", "files"}}` (the pipeline adds the accuracy block); `amplitude_window`: the window of
+/// the spectrum_<probe>.csv files.
+nlohmann::json spectrum_json(double excitation_hz, const std::vector<ProbeTable>& probes, spectral::Window amplitude_window,
                              const spectral::SteadyState& state, int window_periods);
 
 /// The modal frequency a ring-down is compared with (`reference`: bilinear, open or uncracked; the

@@ -66,7 +66,7 @@ nlohmann::json contact_json(const contact::PenaltyContact& contact) {
     json["penalty_element_size"] = penalty.element_size;
   }
   json["friction"] = contact.options().friction_coefficient;
-  json["contact_integration"] = contact.implicit() ? "implicit" : "explicit";
+  json["contact_integration"] = text_of(kContactIntegrationWords, contact.options().integration);
   return json;
 }
 

@@ -52,16 +52,14 @@ bool slepc_options_given() {
 modal::ModalOptions modal_options(const scene::ModalSection& section) {
   modal::ModalOptions options;
   options.modes = section.modes;
-  for (const std::string& name : section.variants) {
-    options.variants.push_back(name == "open" ? mesh::Variant::open : mesh::Variant::uncracked);
-  }
+  options.variants = section.variants;
   // auto: ARPACK with CHOLMOD on one process (fewer solves with the same factor than Krylov-Schur:
   // 8.9 s against 10.3 s at 86k DOFs, docs/benchmarks.md section 3), SLEPc under mpirun (distributed)
   // or when SLEPc's own options are given.
-  const bool arpack = section.solver == "arpack" ||
-                      (section.solver == "auto" && launched_ranks() == 1 && !slepc_options_given());
+  const bool arpack = section.solver == scene::ModalSolver::arpack ||
+                      (section.solver == scene::ModalSolver::automatic && launched_ranks() == 1 && !slepc_options_given());
   options.solver = arpack ? modal::Solver::arpack : modal::Solver::slepc;
-  options.lumped_mass = section.mass == "lumped";
+  options.lumped_mass = section.mass == scene::MassMatrix::lumped;
   return options;
 }
 
@@ -74,7 +72,7 @@ void run_modal_command(const ModalCommandOptions& options, std::ostream& out, co
   const scene::Scene scene = scene::load_scene(options.scene_path, overrides);
   scene::ModalSection section = scene.modal;
   if (options.modes > 0) section.modes = options.modes;
-  if (!options.solver.empty()) section.solver = options.solver;
+  if (!options.solver.empty()) section.solver = parse_word(scene::kModalSolverWords, options.solver, "--solver");
   const bool writer = modal::is_output_rank();
   // Fail on an unwritable or foreign output directory, or a mesh too big for the memory, before the solve.
   check_memory(scene, matrices::eigen_solve, MeshUse::modal);

@@ -23,7 +23,7 @@ std::vector<mesh::Variant> needed_variants(const scene::Scene& scene, std::strin
     if (of != scene::ModeOf::uncracked) variants.insert(mesh::Variant::open);
     reason = "transient.excitation.frequency refers to mode " + std::to_string(transient.excitation->mode);
   }
-  if (transient.release && transient.release->kind == "mode") {
+  if (transient.release && transient.release->kind == scene::ReleaseKind::mode) {
     variants.insert(transient.release->variant);
     if (reason.empty()) reason = "transient.release.mode refers to mode " + std::to_string(transient.release->mode);
   }
@@ -40,9 +40,7 @@ std::vector<mesh::Variant> needed_variants(const scene::Scene& scene, std::strin
     }
   }
   if (scene.has_modal_section) {
-    for (const std::string& name : scene.modal.variants) {
-      variants.insert(name == "open" ? mesh::Variant::open : mesh::Variant::uncracked);
-    }
+    variants.insert(scene.modal.variants.begin(), scene.modal.variants.end());
     if (reason.empty()) reason = "the scene has a modal: section";
   }
   // Keep the uncracked limit first, as the modal module lists it.

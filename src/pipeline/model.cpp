@@ -162,8 +162,7 @@ contact::ContactOptions scene_contact_options(const scene::Scene& scene) {
   contact.initial_gap = scene.crack ? scene.crack->gap : (scene.crack_group ? scene.crack_group->gap : 0.0);
   contact.normal_penalty = scene.contact.penalty.value_or(0.0);
   contact.friction_coefficient = scene.contact.friction;
-  contact.integration = scene.contact.integration == "explicit" ? contact::ContactIntegration::explicit_forces
-                                                                : contact::ContactIntegration::implicit;
+  contact.integration = scene.contact.integration;
   return contact;
 }
 

@@ -87,7 +87,7 @@ transient::Probe place_probe(const scene::Scene& scene, const Model& model, cons
   placed.name = probe.name;
   if (!probe.crack_opening) {
     placed.node = placer.place(probe.point, entry + ".point").node;
-    if (probe.side.empty()) return placed;
+    if (!probe.side) return placed;
     const mesh::CrackPair* pair = nearest_split_pair(mesh, probe.point, placed.node);
     if (!pair) {
       const Vec3& x = mesh.nodes[placed.node];
@@ -96,7 +96,7 @@ transient::Probe place_probe(const scene::Scene& scene, const Model& model, cons
                        format_number(x[0]) + ", " + format_number(x[1]) + ", " + format_number(x[2]) +
                        ") that is not split (off the crack or on its front)");
     }
-    placed.node = probe.side == "upper" ? pair->minus : pair->plus;
+    placed.node = probe.side == scene::FaceSide::upper ? pair->minus : pair->plus;
     return placed;
   }
   placer.place(probe.point, entry + ".crack_opening");  // inside the body

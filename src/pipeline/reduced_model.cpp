@@ -124,7 +124,7 @@ ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, 
   const bool with_crack = transient_variant(scene, model) == mesh::Variant::open;
   const fem::System& system = *model.system(transient_variant(scene, model));
   const contact::ContactOptions contact_options = scene_contact_options(scene);
-  const bool friction = with_crack && scene.contact.model != "none" && contact_options.friction_coefficient > 0.0;
+  const bool friction = with_crack && scene.contact.model != scene::ContactModel::none && contact_options.friction_coefficient > 0.0;
 
   ReducedModel result;
   const std::vector<reduced::OutputPoint> outputs = output_points(scene, model, probes, result);
@@ -155,7 +155,7 @@ ReducedModel build_reduced_model(const scene::Scene& scene, const Model& model, 
     result.system.output_residual_pairs.setZero();
     result.system.output_residual_load.setZero();
   }
-  const bool with_pairs = with_crack && scene.contact.model != "none";
+  const bool with_pairs = with_crack && scene.contact.model != scene::ContactModel::none;
   if (!with_pairs) drop_pairs(result.system);
   find_probe_pairs(model.mesh, with_pairs, probes, result);
   if (section.snapshots > 0) {

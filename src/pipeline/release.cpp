@@ -108,7 +108,7 @@ transient::InitialConditions release_state(const scene::ReleaseSection& release,
   initial.velocity = VectorX::Zero(system.n_dofs());
   ReleaseReport local;
   local.kind = release.kind;
-  if (release.kind == "static") {
+  if (release.kind == scene::ReleaseKind::static_deflection) {
     fem::LoadPlacement placement;
     placement.name = where + ": transient.release.static";
     if (!release.face.empty()) placement.faces = mesh.face_sets.at(release.face);

@@ -42,7 +42,7 @@ StaticSolution solve_static(const fem::System& system, const VectorX& force, con
 
 /// What release_state did (for the terminal and transient.json).
 struct ReleaseReport {
-  std::string kind;          ///< static | mode
+  scene::ReleaseKind kind = scene::ReleaseKind::static_deflection;
   int iterations = 0;        ///< static: active-set iterations
   Index n_pairs = 0;         ///< static: split crack pairs with contact (0 without)
   Index n_closed = 0;        ///< static: pairs closed at the released state

@@ -79,7 +79,7 @@ RunOutcome run_scene(const scene::Scene& scene, const RunCommandOptions& options
   transient_stage.seconds = transient_clock.seconds();
   stages.push_back(transient_stage);
   if (setup.release) {
-    out << "release (" << setup.release->kind << "): largest displacement " << setup.release->largest_displacement
+    out << "release (" << text_of(scene::kReleaseKindWords, setup.release->kind) << "): largest displacement " << setup.release->largest_displacement
         << " m";
     if (setup.release->n_pairs > 0) {
       out << ", " << setup.release->n_closed << " of " << setup.release->n_pairs << " crack pairs closed after "

@@ -93,7 +93,7 @@ TransientSetup transient_setup(const scene::Scene& scene, const Model& model,
   settings.variant = setup.variant;
   const fem::System& system = *model.system(setup.variant);
   const bool with_contact =
-      setup.variant == mesh::Variant::open && model.mesh.has_crack() && scene.contact.model != "none";
+      setup.variant == mesh::Variant::open && model.mesh.has_crack() && scene.contact.model != scene::ContactModel::none;
   const contact::ContactOptions contact_options = scene_contact_options(scene);
   if (with_contact) {
     setup.contact = std::make_shared<contact::ContactForce>(model.mesh, system.dofs(), model.materials, contact_options);
@@ -124,7 +124,7 @@ TransientSetup transient_setup(const scene::Scene& scene, const Model& model,
       setup.probes_json.back()["normal"] = {placed.frame(0, 0), placed.frame(0, 1), placed.frame(0, 2)};
       continue;
     }
-    if (!probe.side.empty()) setup.probes_json.back()["side"] = probe.side;
+    if (probe.side) setup.probes_json.back()["side"] = text_of(scene::kFaceSideWords, *probe.side);
     // A probe whose analysed component is held (a clamped face) has A1 = 0: its ratios are NaN.
     const int component = probe.component >= 0 ? probe.component
                           : section.excitation  ? section.excitation->direction

@@ -91,6 +91,7 @@ nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::file
   std::vector<output::ProbeTable> tables;
   const spectral::Sampling sampling{dt, 0.0};  // every step, from t = 0
   spectral::SpectrumAnalyzer analyzer;
+  spectral::Window amplitude_window = spectrum_.window;  // auto's choice, once a probe's spectrum is made
   plot::PlotOptions plot;
   for (std::size_t p = 0; p < probes_.size(); ++p) {
     const ProbeSpectrum& probe = probes_[p];
@@ -115,7 +116,9 @@ nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::file
     spectrum_options.excitation_frequency_hz = frequency;
     spectrum_options.periods = used;
     spectrum_options.subharmonics = options_.subharmonics;
+    spectrum_options.window = spectrum_.window;
     const spectral::AmplitudeSpectrum amplitude = analyzer.amplitude_spectrum(values, sampling, spectrum_options);
+    amplitude_window = amplitude.window;
     io::write_file_atomic(directory / ("spectrum_" + probe.name + ".csv"), spectral::spectrum_csv(amplitude, "m"));
     if (spectrum_.plots) {
       plot.title = probe.name + " " + probe.quantity;
@@ -130,7 +133,7 @@ nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::file
     if (options_.subharmonics) out << ", A1/2/A1 = " << indices.a_half_over_a1;
     out << "\n";
   }
-  return output::spectrum_json(frequency, tables, state, used);
+  return output::spectrum_json(frequency, tables, amplitude_window, state, used);
 }
 
 namespace {
@@ -155,7 +158,7 @@ std::optional<output::ModalComparison> modal_comparison(const modal::ModalResult
   }
   const modal::VariantResult* variant = modes.find(setup.variant);
   if (!variant) return comparison;
-  const std::string name = setup.variant == mesh::Variant::open ? "open" : "uncracked";
+  const std::string name = mesh::variant_name(setup.variant);
   for (int i = 0; i < variant->modes.n_modes(); ++i) {
     const double f = variant->modes.frequencies_hz[i];
     if (std::abs(f - frequency_hz) >= best) continue;
@@ -213,7 +216,7 @@ void write_ringdown_spectrum(const scene::Scene& scene, const std::filesystem::p
   const std::optional<scene::ExcitationSection>& excitation = section.excitation;
   const bool pulse = excitation && excitation->kind == scene::ExcitationKind::pulse;
   const int default_component =
-      excitation ? excitation->direction : (section.release && section.release->kind == "static" ? section.release->direction : 2);
+      excitation ? excitation->direction : (section.release && section.release->kind == scene::ReleaseKind::static_deflection ? section.release->direction : 2);
   if (history.time.size() < 2) throw SolverError(scene.file + ": spectrum: the run recorded fewer than 2 samples");
   const spectral::Sampling sampling{history.time[1] - history.time[0], history.time.front()};
   spectral::RingdownOptions options;
@@ -271,7 +274,7 @@ void write_ringdown_spectrum(const scene::Scene& scene, const std::filesystem::p
   }
   io::write_json(directory / "spectrum.json",
                  output::ringdown_spectrum_json(pulse ? "pulse" : (excitation ? scene::excitation_kind_name(excitation->kind) : "none"), probes,
-                                                setup.release ? setup.release->kind : std::string()));
+                                                setup.release ? text_of(scene::kReleaseKindWords, setup.release->kind) : ""));
 }
 
 }  // namespace crackle::pipeline

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/errors.hpp"
 #include "scene/schema.hpp"
@@ -14,11 +15,7 @@
 namespace crackle::scene {
 namespace {
 
-const std::vector<std::string> kAxes = {"x", "y", "z"};
-
-int axis_index(const std::string& axis) {
-  return static_cast<int>(std::find(kAxes.begin(), kAxes.end(), axis) - kAxes.begin());
-}
+const std::vector<std::string> kAxes = texts_of(kAxisWords);
 
 /// Default of `boundary[i].value`: a zero for each fixed component.
 std::string zeros_per_fix(const Values& values, const std::string& entry) {
@@ -36,15 +33,16 @@ std::string default_variants(const Values& values, const std::string&) {
 /// `sweep.frequency.from` / `.to`: like transient.excitation.frequency.
 Param sweep_end(const std::string& name, const std::string& doc) {
   return map_of(name, doc, {
-      number("hz", "Frequency in Hz.").with_unit("Hz").above(0),
-      integer("mode", "Elastic mode number (1 = lowest) the frequency refers to; needs a modal solve.").at_least(1),
-      number("ratio", "Multiple of the mode's frequency.").above(0).defaults_to("1"),
+      number("hz", "Frequency in Hz.").with_unit("Hz").above(0).to(&SweepFrequencySection::hz),
+      integer("mode", "Elastic mode number (1 = lowest) the frequency refers to; needs a modal solve.").at_least(1)
+          .to(&SweepFrequencySection::mode),
+      number("ratio", "Multiple of the mode's frequency.").above(0).defaults_to("1").to(&SweepFrequencySection::ratio),
       choice("of", "Which frequency of the mode: bilinear (default with a crack), uncracked (default without) or "
-                   "open.", {"bilinear", "uncracked", "open"})
+                   "open.", kModeOfWords)
           .defaults_to("bilinear with a crack, else uncracked", [](const Values& values, const std::string&) {
             return std::string(values.has("crack") ? "bilinear" : "uncracked");
-          }),
-  }).or_scalar_for("hz").required();
+          }).to(&SweepFrequencySection::of),
+  }).or_scalar_for("hz").exactly_one_of({"hz", "mode"}).required();
 }
 
 /// An optional map of position lists along x, y and z [m], at most `most` per axis.
@@ -83,7 +81,7 @@ Param build_parameters() {
                          "crackle identify and crackle plan (their ratios on a uniform grid: docs/benchmarks.md "
                          "section 13.7); always: graded for every "
                          "command (with the reduced model the way to an accurate A2/A1, docs/benchmarks.md "
-                         "section 5.1); none: no grading.", {"auto", "always", "none"}).defaults_to("auto"),
+                         "section 5.1); none: no grading.", kGradingModeWords).defaults_to("auto"),
           integer("layers", "Geometric layers on each side of the front; auto: p - 1 + round(log2(D/h)) "
                               "in 1..4, h the uniform cell size across the front, D the body's thinnest side.").at_least(1)
               .at_most(8).or_word("auto").defaults_to("auto"),
@@ -100,9 +98,9 @@ Param build_parameters() {
     }).required(),
     map_of("material", "Isotropic linear elastic material of the whole body (MODEL.md eq. 2); or give "
                        "materials.", {
-      number("E", "Young's modulus.").with_unit("Pa").above(0).required(),
-      number("nu", "Poisson's ratio.").above(-1).below(0.5).required(),
-      number("rho", "Mass density.").with_unit("kg/m^3").above(0).required(),
+      number("E", "Young's modulus.").with_unit("Pa").above(0).required().to(&MaterialSection::young),
+      number("nu", "Poisson's ratio.").above(-1).below(0.5).required().to(&MaterialSection::poisson),
+      number("rho", "Mass density.").with_unit("kg/m^3").above(0).required().to(&MaterialSection::density),
     }),
     list_of("materials", "Materials by region (layered composites), instead of material: each element takes the "
                          "one material whose region holds its centroid.", {
@@ -137,7 +135,7 @@ Param build_parameters() {
     list_of("boundary", "Prescribed displacements on box faces or mesh groups; none: a free body.", {
       choice("face", "Face of the box (give face or group).", {faces.begin(), faces.end()}),
       text("group", "Physical group of a Gmsh mesh (any named node set of the mesh)."),
-      choice("fix", "Displacement components fixed on every node of the face.", kAxes).list(1, 3).distinct()
+      choice("fix", "Displacement components fixed on every node of the face.", kAxisWords).list(1, 3).distinct()
           .required(),
       number("value", "Prescribed displacement of each fixed component.").with_unit("m").list(1, 3)
           .same_length_as("fix").defaults_to("zeros", zeros_per_fix),
@@ -145,7 +143,7 @@ Param build_parameters() {
     map_of("crack", "An axis-aligned rectangular crack on a grid plane of a box mesh (plane and region), or a "
                     "physical surface group of a Gmsh mesh (group); none: no crack.", {
       map_of("plane", "The plane of the crack.", {
-        choice("normal", "Axis normal to the crack.", kAxes).required(),
+        choice("normal", "Axis normal to the crack.", kAxisWords).required(),
         number("at", "Position of the plane along the normal; must be a grid plane origin + k size/cells "
                      "strictly inside the body.").with_unit("m").required(),
       }),
@@ -175,141 +173,155 @@ Param build_parameters() {
       map_of("contact", "Penalty contact between the crack faces in transient runs (MODEL.md eq. 25d, 15).", {
         choice("model", "penalty: the crack faces touch (penalty springs, a breathing crack); none: no contact, "
                         "the faces pass through each other (the open body, a linear run at the open "
-                        "frequencies).", {"penalty", "none"}).defaults_to("penalty"),
+                        "frequencies).", kContactModelWords).defaults_to("penalty").to(&ContactSection::model),
         number("penalty", "Normal penalty eps_N (force per unit area per unit penetration); auto: from E and "
                           "the element size normal to the crack.").with_unit("Pa/m").above(0).or_word("auto")
-            .defaults_to("auto"),
+            .defaults_to("auto").to(&ContactSection::penalty),
         number("friction", "Coulomb friction coefficient mu (tangential penalty with a return mapping).")
-            .at_least(0).defaults_to("0"),
+            .at_least(0).defaults_to("0").to(&ContactSection::friction),
         choice("integration", "implicit: the penalty law at U(i+1), solved per pair in closed form, so the "
                               "springs do not limit the time step (auto penalty " +
                                   format_number(defaults::kImplicitPenaltyFactor) + " E/h); explicit: the force "
                               "at U(i) as in MODEL.md eq. 27, the springs enter omega_max at 4 times their own "
                               "frequency so that contact events are resolved (stable at any penalty; steps grow as "
                               "sqrt(penalty); auto penalty " +
-                                  format_number(defaults::kExplicitPenaltyFactor) + " E/h).", {"implicit", "explicit"}).defaults_to("implicit"),
+                                  format_number(defaults::kExplicitPenaltyFactor) + " E/h).", kContactIntegrationWords).defaults_to("implicit")
+            .to(&ContactSection::integration),
       }),
     }).optional_section(),
     map_of("modal", "Modal analysis of the linear limits of the cracked body; optional.", {
-      integer("modes", "Number of lowest modes per variant.").at_least(1).defaults_to(std::to_string(defaults::kModes)),
+      integer("modes", "Number of lowest modes per variant.").at_least(1).defaults_to(std::to_string(defaults::kModes))
+          .to(&ModalSection::modes),
       choice("variants", "Linear limits to analyse: faces tied (uncracked) or free (open); open needs a crack.",
-             {"uncracked", "open"}).list(1, 2).distinct()
-          .defaults_to("[uncracked, open] with a crack, else [uncracked]", default_variants),
+             mesh::kVariantWords).list(1, 2).distinct()
+          .defaults_to("[uncracked, open] with a crack, else [uncracked]", default_variants)
+          .to(&ModalSection::variants),
       choice("solver", "Eigen-solver: slepc (Krylov-Schur; the one that runs under MPI), arpack (Lanczos with "
                        "CHOLMOD; the fastest on one process, docs/benchmarks.md section 3) or auto (arpack on one "
                        "process; slepc under mpirun or given SLEPc options such as -eps_tol).",
-             {"auto", "slepc", "arpack"}).defaults_to("auto"),
-      choice("mass", "Mass matrix.", {"consistent", "lumped"}).defaults_to("consistent"),
+             kModalSolverWords).defaults_to("auto").to(&ModalSection::solver),
+      choice("mass", "Mass matrix.", kMassMatrixWords).defaults_to("consistent").to(&ModalSection::mass),
     }),
     map_of("transient", "Explicit dynamics (MODEL.md eqs. 24-28) run by `crackle run`; optional.", {
       map_of("excitation", "Force on a face, mesh group or the node nearest a point (give one of them).", {
-        choice("face", "Loaded face of the box (uniform traction of the given total).", {faces.begin(), faces.end()}),
-        text("group", "Loaded node set of a Gmsh mesh."),
-        number("point", "Loaded point: the force acts on the nearest node.").with_unit("m").list(3),
-        choice("direction", "Direction of the force.", kAxes).defaults_to("z"),
-        number("amplitude", "Total force amplitude (the peak force of a pulse).").with_unit("N").above(0).required(),
+        choice("face", "Loaded face of the box (uniform traction of the given total).", {faces.begin(), faces.end()})
+            .to(&ExcitationSection::face),
+        text("group", "Loaded node set of a Gmsh mesh.").to(&ExcitationSection::group),
+        number("point", "Loaded point: the force acts on the nearest node.").with_unit("m").list(3)
+            .to(&ExcitationSection::point),
+        choice("direction", "Direction of the force.", kAxisWords).defaults_to("z").to(&ExcitationSection::direction),
+        number("amplitude", "Total force amplitude (the peak force of a pulse).").with_unit("N").above(0).required()
+            .to(&ExcitationSection::amplitude),
         choice("kind", "harmonic: sin(2 pi f t) ramped in; pulse: an impact-hammer blow, one half-sine of the "
                        "given duration and peak `amplitude` from t = 0 (its spectrum falls to a third of its "
                        "static value at 1/duration; the spectrum stage writes the FRF H = X/F up to there).",
-               {"harmonic", "pulse"}).defaults_to("harmonic"),
+               kExcitationKindWords).defaults_to("harmonic").to(&ExcitationSection::kind),
         map_of("frequency", "Excitation frequency: a value in Hz, or relative to a mode.", {
-          number("hz", "Frequency in Hz.").with_unit("Hz").above(0),
+          number("hz", "Frequency in Hz.").with_unit("Hz").above(0).to(&ExcitationSection::frequency_hz),
           integer("mode", "Elastic mode number (1 = lowest) the frequency refers to; needs a modal solve.")
-              .at_least(1),
-          number("ratio", "Multiple of the mode's frequency.").above(0).defaults_to("1"),
+              .at_least(1).to(&ExcitationSection::mode),
+          number("ratio", "Multiple of the mode's frequency.").above(0).defaults_to("1").to(&ExcitationSection::ratio),
           choice("of", "Which frequency of the mode: bilinear (default with a crack), uncracked (default "
-                       "without) or open.", {"bilinear", "uncracked", "open"})
+                       "without) or open.", kModeOfWords)
               .defaults_to("bilinear with a crack, else uncracked", [](const Values& values, const std::string&) {
                 return std::string(values.has("crack") ? "bilinear" : "uncracked");
-              }),
-        }).or_scalar_for("hz").optional_section(),
-        number("ramp_periods", "Harmonic excitation: periods of the smooth ramp-in.").at_least(0).defaults_to("3"),
-        number("duration", "Pulse: duration of the half-sine.").with_unit("s").above(0),
-      }).optional_section(),
+              }).to(&ExcitationSection::of),
+        }).or_scalar_for("hz").exactly_one_of({"hz", "mode"}).optional_section(),
+        number("ramp_periods", "Harmonic excitation: periods of the smooth ramp-in.").at_least(0).defaults_to("3")
+            .to(&ExcitationSection::ramp_periods),
+        number("duration", "Pulse: duration of the half-sine.").with_unit("s").above(0).to(&ExcitationSection::duration),
+      }).exactly_one_of({"face", "group", "point"}).optional_section(),
       map_of("damping", "Rayleigh damping C = alpha M + beta K: a ratio at a frequency, or alpha and beta.", {
-        number("ratio", "Damping ratio xi at the frequency `at`.").at_least(0).below(1),
+        number("ratio", "Damping ratio xi at the frequency `at`.").at_least(0).below(1).to(&DampingSection::ratio),
         map_of("at", "Frequency of the damping ratio: a value in Hz or a mode.", {
-          number("hz", "Frequency in Hz.").with_unit("Hz").above(0),
-          integer("mode", "Elastic mode number (uncracked variant).").at_least(1),
-        }).or_scalar_for("hz").optional_section(),
+          number("hz", "Frequency in Hz.").with_unit("Hz").above(0).to(&DampingSection::at_hz),
+          integer("mode", "Elastic mode number (uncracked variant).").at_least(1).to(&DampingSection::at_mode),
+        }).or_scalar_for("hz").exactly_one_of({"hz", "mode"}).optional_section(),
         choice("type", "mass: alpha = 2 xi omega (free per step, no time-step penalty); stiffness: "
-                       "beta = 2 xi / omega (shrinks the stable step).", {"mass", "stiffness"}).defaults_to("mass"),
-        number("alpha", "Mass-proportional coefficient.").with_unit("1/s").at_least(0),
-        number("beta", "Stiffness-proportional coefficient.").with_unit("s").at_least(0),
+                       "beta = 2 xi / omega (shrinks the stable step).", kDampingTypeWords).defaults_to("mass")
+            .to(&DampingSection::type),
+        number("alpha", "Mass-proportional coefficient.").with_unit("1/s").at_least(0).to(&DampingSection::alpha),
+        number("beta", "Stiffness-proportional coefficient.").with_unit("s").at_least(0).to(&DampingSection::beta),
       }).optional_section(),
       number("periods", "Length of the run in excitation periods (the limit when steady-state detection "
-                        "is on).").above(0),
-      number("duration", "Length of the run.").with_unit("s").above(0),
+                        "is on).").above(0).to(&TransientSection::periods),
+      number("duration", "Length of the run.").with_unit("s").above(0).to(&TransientSection::duration),
       number("time_step", "Time step; auto: safety_factor x the critical step (adjusted down so that an "
                           "excitation period is a whole number of steps).").with_unit("s").above(0)
-          .or_word("auto").defaults_to("auto"),
+          .or_word("auto").defaults_to("auto").to(&TransientSection::time_step),
       number("safety_factor", "Fraction of the critical time step used by time_step: auto.").above(0).at_most(1)
-          .defaults_to(format_number(defaults::kSafetyFactor)),
+          .defaults_to(format_number(defaults::kSafetyFactor)).to(&TransientSection::safety_factor),
       boolean("force_time_step", "Run a time step above the critical one anyway (the health checks stop a "
-                                 "diverging run).").defaults_to("false"),
+                                 "diverging run).").defaults_to("false").to(&TransientSection::force_time_step),
       choice("variant", "Run the body with its crack (open faces with contact) or with the faces tied.",
-             {"open", "uncracked"}).defaults_to("open"),
+             mesh::kVariantWords).defaults_to("open").to(&TransientSection::variant),
       choice("model", "full: the explicit finite-element model (MODEL.md eqs. 24-28); reduced: modes of the "
                       "variant + residual flexibility at the crack pairs (HYBRID.md sec. 2-3), implicit steps set "
                       "by accuracy (rigid-body modes of a free body or piece are kept as modes of frequency 0); "
                       "auto: the reduced model on its own graded mesh of a box for a harmonic-drive signature run "
                       "(a crack, a spectrum: section, one process, no transient.time_step, no initial fields or "
                       "release), raising the element order until accuracy.tolerance is met, else the full model; "
-                      "run.json route says which and why.", {"full", "reduced", "auto"})
-          .defaults_to("auto"),
+                      "run.json route says which and why.", kTransientModelWords)
+          .defaults_to("auto").to(&TransientSection::model),
       map_of("reduced", "The reduced model (transient.model: reduced).", {
         integer("modes", "Modes kept; auto: every mode of the variant up to max_frequency.").at_least(1)
-            .or_word("auto").defaults_to("auto"),
+            .or_word("auto").defaults_to("auto").to(&ReducedSection::modes),
         number("max_frequency", "Highest frequency resolved: modes up to it (modes: auto) and the time step; "
                                 "auto: 4 x spectrum.harmonics (5 without spectrum:) x the excitation frequency.")
-            .with_unit("Hz").above(0).or_word("auto").defaults_to("auto"),
+            .with_unit("Hz").above(0).or_word("auto").defaults_to("auto").to(&ReducedSection::max_frequency_hz),
         integer("steps_per_period", "Time steps per period of the highest retained mode or of max_frequency, "
                                     "whichever is higher (average-acceleration Newmark: frequency error "
-                                    "(2 pi / n)^2 / 12).").at_least(4).defaults_to("40"),
+                                    "(2 pi / n)^2 / 12).").at_least(4).defaults_to("40").to(&ReducedSection::steps_per_period),
         boolean("residual_flexibility", "Keep the static correction of the truncated modes (HYBRID.md sec. 2); "
-                                        "false only to measure what it brings.").defaults_to("true"),
+                                        "false only to measure what it brings.").defaults_to("true")
+            .to(&ReducedSection::residual_flexibility),
       }),
       list_of("probes", "Points whose displacement, velocity and acceleration are recorded (nearest node).", {
         text("name", "Name of the probe: letters, digits, _ . - (column prefix, file names, spectrum.json key).")
-            .required(),
+            .required().to(&ProbeSection::name),
         number("point", "Position: the displacement of the nearest node (give point or crack_opening).")
-            .with_unit("m").list(3),
+            .with_unit("m").list(3).to(&ProbeSection::point),
         choice("side", "For a point on a crack face: which copy of the split node to record, lower (coordinate "
                        "below the crack plane: the plus face of MODEL.md eq. 9, the default nearest node) or "
-                       "upper (the minus face).", {"lower", "upper"}),
+                       "upper (the minus face).", kFaceSideWords).to(&ProbeSection::side),
         number("crack_opening", "Position: the crack pair nearest it (give point or crack_opening); records "
                                 "the normal gap g_N = g0 + (u- - u+) . n+ (eq. 9), the tangential slip along "
                                 "two tangents (eq. 10), their rates, and the contact state (0 open, 1 stick, 2 "
-                                "slip) as probes.csv columns; the spectrum analyses the gap.").with_unit("m").list(3),
+                                "slip) as probes.csv columns; the spectrum analyses the gap.").with_unit("m").list(3)
+            .to(&ProbeSection::point),
         choice("component", "Component of the displacement analysed by the spectrum (default: the excitation "
                             "direction); its unit is that of the harmonic amplitudes. Not with crack_opening "
-                            "(its gap is analysed).", kAxes).with_unit("m"),
-      }).defaults_to("[]"),
+                            "(its gap is analysed).", kAxisWords).with_unit("m").to(&ProbeSection::component),
+      }).exactly_one_of({"point", "crack_opening"}).defaults_to("[]"),
       map_of("release", "Free vibration: the run starts at rest from a deflected state (MODEL.md eq. 6), given "
                         "by exactly one of static and mode; added to `initial`.", {
         map_of("static", "The static deflection under a load, with the crack's contact active (the nonlinear "
                          "static problem: a crack pressed shut or pulled open starts from its true state); the "
                          "load is removed at t = 0.", {
-          choice("face", "Loaded face of the box (uniform traction of the given total).", {faces.begin(), faces.end()}),
-          text("group", "Loaded node set of a Gmsh mesh."),
-          number("point", "Loaded point: the force acts on the nearest node.").with_unit("m").list(3),
-          choice("direction", "Direction of the force.", kAxes).defaults_to("z"),
-          number("amplitude", "Total static force.").with_unit("N").above(0).required(),
-        }).optional_section(),
+          choice("face", "Loaded face of the box (uniform traction of the given total).", {faces.begin(), faces.end()})
+              .to(&ReleaseSection::face),
+          text("group", "Loaded node set of a Gmsh mesh.").to(&ReleaseSection::group),
+          number("point", "Loaded point: the force acts on the nearest node.").with_unit("m").list(3)
+              .to(&ReleaseSection::point),
+          choice("direction", "Direction of the force.", kAxisWords).defaults_to("z").to(&ReleaseSection::direction),
+          number("amplitude", "Total static force.").with_unit("N").above(0).required().to(&ReleaseSection::amplitude),
+        }).exactly_one_of({"face", "group", "point"}).optional_section(),
         map_of("mode", "A mode shape of one linear limit (the modal stage runs for that variant).", {
-          integer("number", "Elastic mode number (1 = lowest).").at_least(1).required(),
+          integer("number", "Elastic mode number (1 = lowest).").at_least(1).required().to(&ReleaseSection::mode),
           choice("variant", "Which linear limit's mode: faces tied (uncracked) or free (open).",
-                 {"uncracked", "open"}).defaults_to("uncracked"),
+                 mesh::kVariantWords).defaults_to("uncracked").to(&ReleaseSection::variant),
           number("amplitude", "Largest nodal displacement of the scaled mode shape.").with_unit("m").above(0)
-              .required(),
+              .required().to(&ReleaseSection::amplitude),
         }).optional_section(),
-      }).optional_section(),
+      }).exactly_one_of({"static", "mode"}).optional_section(),
       list_of("initial", "Initial velocity and displacement (MODEL.md eq. 6), uniform over the nodes in a "
                          "coordinate range (all nodes when no range is given). With transient.model: reduced the fields "
                          "(and a release) are projected on the retained modes (transient.json initial_state: the "
                          "share left out).", {
-        number("velocity", "Initial velocity.").with_unit("m/s").list(3).defaults_to("[0, 0, 0]"),
-        number("displacement", "Initial displacement.").with_unit("m").list(3).defaults_to("[0, 0, 0]"),
+        number("velocity", "Initial velocity.").with_unit("m/s").list(3).defaults_to("[0, 0, 0]")
+            .to(&InitialSection::velocity),
+        number("displacement", "Initial displacement.").with_unit("m").list(3).defaults_to("[0, 0, 0]")
+            .to(&InitialSection::displacement),
         number("x", "Range along x.").with_unit("m").list(2),
         number("y", "Range along y.").with_unit("m").list(2),
         number("z", "Range along z.").with_unit("m").list(2),
@@ -319,7 +331,7 @@ Param build_parameters() {
                           "at the snapshots (one factor of K, made at the first).", {
         integer("count", "Number of snapshots spread evenly over the run (0: none), at most one per step; "
                          "snapshots.pvd lists them with their times (a time series in ParaView).")
-            .at_least(0).defaults_to("0"),
+            .at_least(0).defaults_to("0").to(&TransientSection::snapshots),
       }),
       map_of("history", "Probe histories written to probes.csv; the harmonic analysis and the spectra take "
                         "every step regardless.", {
@@ -327,31 +339,37 @@ Param build_parameters() {
                                       "pulse; without an excitation every step is written); all: every step.")
             .at_least(2).or_word("all").defaults_to("64"),
       }),
-      boolean("progress", "Progress line with ETA on the terminal.").defaults_to("true"),
-    }).optional_section(),
+      boolean("progress", "Progress line with ETA on the terminal.").defaults_to("true").to(&TransientSection::progress),
+    }).exactly_one_of({"periods", "duration"}).optional_section(),
     map_of("spectrum", "Harmonics of the probe responses and damage indices (needs transient).", {
       integer("harmonics", "Highest harmonic order analysed (orders 1..harmonics of the excitation).")
-          .at_least(1).at_most(50).defaults_to("5"),
-      boolean("subharmonics", "Also orders 1/2, 3/2, 5/2, ...").defaults_to("true"),
+          .at_least(1).at_most(50).defaults_to("5").to(&SpectrumSection::harmonics),
+      boolean("subharmonics", "Also orders 1/2, 3/2, 5/2, ...").defaults_to("true").to(&SpectrumSection::subharmonics),
       map_of("steady_state", "Stop when the harmonic table has settled.", {
         number("tolerance", "Largest change of any harmonic (relative to A1) between the last two windows; "
-                            "0: never stop early.").at_least(0).defaults_to("1e-3"),
-        integer("min_periods", "Periods run before the check starts.").at_least(1).defaults_to("20"),
+                            "0: never stop early.").at_least(0).defaults_to("1e-3").to(&SpectrumSection::tolerance),
+        integer("min_periods", "Periods run before the check starts.").at_least(1).defaults_to("20")
+            .to(&SpectrumSection::min_periods),
         integer("window_periods", "Periods per analysis window (made even for sub-harmonics).").at_least(1)
-            .defaults_to("10"),
+            .defaults_to("10").to(&SpectrumSection::window_periods),
       }),
       map_of("ringdown", "Ring-down analysis, run instead of the harmonic table when the excitation is not "
                          "harmonic (free vibration, a pulse, or none): dominant frequency, damping ratio and "
                          "orders of it.", {
         number("start", "Analysis start time; auto: 0, or the end of a pulse.").with_unit("s").at_least(0)
-            .or_word("auto").defaults_to("auto"),
+            .or_word("auto").defaults_to("auto").to(&SpectrumSection::ringdown_start),
         integer("window_periods", "Periods of the dominant frequency per envelope window (made even for "
-                                  "sub-harmonics).").at_least(1).defaults_to("4"),
+                                  "sub-harmonics).").at_least(1).defaults_to("4").to(&SpectrumSection::ringdown_window_periods),
       }),
-      choice("window", "auto: integer-period rectangular window when the sampling allows, else resampled or "
-                       "Hann.", {"auto", "rectangular", "hann", "flattop"}).defaults_to("auto"),
+      choice("window", "Window of the amplitude spectra (spectrum_<probe>.csv and their plots, over the analysed "
+                       "periods): auto: rectangular when a period is a whole number of time steps (every "
+                       "harmonic on a bin, no leakage), else flat-top (peaks within ~0.1 % between bins); "
+                       "rectangular, hann, flattop: as named (spectrum.json amplitude_spectrum.window says "
+                       "which). The harmonic amplitudes (A1, the ratios, spectrum.json's tables) are always "
+                       "taken over whole periods without a window.", kWindowWords).defaults_to("auto")
+          .to(&SpectrumSection::window),
       boolean("plots", "PNG plots of each probe's history and spectrum (gnuplot; skipped with a note when "
-                       "absent).").defaults_to("true"),
+                       "absent).").defaults_to("true").to(&SpectrumSection::plots),
     }).optional_section(),
     map_of("accuracy", "Error estimates of the signatures (DETECTION.md sec. 1) and a tolerance to reach: each "
                        "numerical error estimated by one refinement at a time from the setting that was run (mesh: "
@@ -367,18 +385,20 @@ Param build_parameters() {
                          "transient.model: auto (the route's own mesh), off for a mesh swept as written; crackle "
                          "modal: on at element order 3 or more on a box (the lower orders cost about a quarter of "
                          "the solve), off below; on (crackle modal below order 3: the orders above, up to 4); off.",
-             {"auto", "on", "off"})
-          .defaults_to("auto"),
+             kEstimateChoiceWords)
+          .defaults_to("auto").to(&AccuracySection::estimate),
       number("tolerance", "Relative error to reach on accuracy.quantities at every probe: the run refines the "
                           "component with the largest error per unit cost until the estimate (the "
                           "components combined with their signs and margins) is below it or accuracy.budget is spent (the mesh: one order up, at order 4 "
                           "one more front layer, up to 3; the window: the steady-state tolerance / 10 and "
                           "transient.periods x 4, twice at most); auto: 0.01 with transient.model: auto, else none "
-                          "(the estimate only).").above(0).below(1).or_word("auto").defaults_to("auto"),
+                          "(the estimate only).").above(0).below(1).or_word("auto").defaults_to("auto")
+          .to(&AccuracySection::tolerance),
       number("budget", "Wall time the tolerance may spend, all runs together.").with_unit("s").above(0)
-          .defaults_to("600"),
+          .defaults_to("600").to(&AccuracySection::budget_s),
       choice("quantities", "Signatures the tolerance applies to (every signature gets its estimate).",
-             {"A1", "A2/A1", "A3/A1", "A1/2/A1", "f_b"}).list(1, 5).distinct().defaults_to("[A1, A2/A1]"),
+             {"A1", "A2/A1", "A3/A1", "A1/2/A1", "f_b"}).list(1, 5).distinct().defaults_to("[A1, A2/A1]")
+          .to(&AccuracySection::quantities),
     }).optional_section(),
     map_of("sweep", "Frequency sweep run by `crackle sweep` (HYBRID.md sections 4-5): the periodic response of the "
                     "reduced model to transient.excitation (its load shape and amplitude; its frequency is swept) "
@@ -388,50 +408,45 @@ Param build_parameters() {
         sweep_end("to", "End of the range: a value in Hz, or relative to a mode."),
       }).required(),
       integer("harmonics", "H: harmonic orders 0..H of the base frequency (excitation / subharmonic).")
-          .at_least(1).at_most(200).defaults_to("15"),
+          .at_least(1).at_most(200).defaults_to("15").to(&SweepSection::harmonics),
       integer("subharmonic", "1, or 2 for period-doubled branches (base frequency = excitation / 2): the "
                              "period-one branch, then the period-two branch from its first period doubling "
                              "(harmonic_balance needs stability for it).")
-          .at_least(1).at_most(2).defaults_to("1"),
+          .at_least(1).at_most(2).defaults_to("1").to(&SweepSection::subharmonic),
       choice("method", "harmonic_balance: pseudo-arclength continuation of the periodic solutions (through "
                        "folds); stepped_sine: the reduced transient run to steady state at each frequency, up "
-                       "then down, as a lab does.", {"harmonic_balance", "stepped_sine"})
-          .defaults_to("harmonic_balance"),
+                       "then down, as a lab does.", kSweepMethodWords)
+          .defaults_to("harmonic_balance").to(&SweepSection::method),
       boolean("stability", "Floquet multipliers at every point (monodromy matrix), Hill's method around each "
                            "stability change (harmonic_balance; frictionless contact only).")
           .defaults_to("true without friction, else false", [](const Values& values, const std::string&) {
             const bool friction = values.has("crack.contact.friction") && values.number("crack.contact.friction") > 0;
             return std::string(friction ? "false" : "true");
-          }),
+          }).to(&SweepSection::stability),
       integer("points", "harmonic_balance: at least this many points (the continuation step is at most the range "
                         "/ points); stepped_sine: this many frequencies each way.").at_least(2).at_most(100000)
-          .defaults_to("200"),
+          .defaults_to("200").to(&SweepSection::points),
       number("tolerance", "stepped_sine: steady when no harmonic changes by more than this times A1 from one "
-                          "period to the next.").above(0).defaults_to("1e-6"),
+                          "period to the next.").above(0).defaults_to("1e-6").to(&SweepSection::tolerance),
       integer("max_periods", "stepped_sine: periods run at most per frequency (a warning names the frequencies "
-                             "that did not settle).").at_least(2).defaults_to("2000"),
+                             "that did not settle).").at_least(2).defaults_to("2000").to(&SweepSection::max_periods),
       choice("solver", "harmonic_balance's linear solves: dense (the Jacobian of pairs x (2H+1) unknowns "
                        "formed and LU-factorised, cost ~ unknowns^3), krylov (matrix-free GMRES preconditioned "
                        "by the mean contact stiffness and each breathing pair's harmonic block, no square "
                        "matrix), auto (dense up to 1500 unknowns).",
-             {"auto", "dense", "krylov"}).defaults_to("auto"),
+             kLinearSolverWords).defaults_to("auto").to(&SweepSection::solver),
       boolean("plots", "sweep_<probe>.png: each probe's amplitudes against frequency (gnuplot; skipped with a "
-                       "note when absent).").defaults_to("true"),
+                       "note when absent).").defaults_to("true").to(&SweepSection::plots),
       number("solve_at", "harmonic_balance: frequencies where every branch is also solved exactly (Newton at "
                          "that frequency from the two points around it): rows of sweep.csv there, to read a "
                          "response at a measured drive frequency instead of between two points.")
-          .with_unit("Hz").above(0).list(1, 100),
+          .with_unit("Hz").above(0).list(1, 100).to(&SweepSection::solve_at_hz),
     }).optional_section(),
   });
   // clang-format on
 }
 
 Vec3 vec3(const std::vector<double>& numbers) { return Vec3(numbers[0], numbers[1], numbers[2]); }
-
-/// The `of` word of a mode-relative frequency (a choice of the table: bilinear, uncracked, open).
-ModeOf mode_of_named(const std::string& word) {
-  return word == "bilinear" ? ModeOf::bilinear : word == "open" ? ModeOf::open : ModeOf::uncracked;
-}
 
 /// Two faces share nodes when they are the same face or meet at a box edge.
 bool faces_touch(const std::string& a, const std::string& b) { return a == b || a[0] != b[0]; }
@@ -466,7 +481,7 @@ void check_boundary(const Values& values, const std::vector<BoundarySection>& bo
 
 mesh::CrackSpec crack_from(const Values& values, const mesh::BoxSpec& box) {
   mesh::CrackSpec crack;
-  crack.normal = axis_index(values.word("crack.plane.normal"));
+  crack.normal = values.choice("crack.plane.normal", kAxisWords);
   crack.at = values.number("crack.plane.at");
   crack.gap = values.number("crack.gap");
 
@@ -485,7 +500,7 @@ mesh::CrackSpec crack_from(const Values& values, const mesh::BoxSpec& box) {
   }
   for (const std::string& axis : in_plane) {
     const auto& range = values.numbers("crack.region." + axis);
-    crack.region[axis_index(axis)] = {range[0], range[1]};
+    crack.region[*value_of(kAxisWords, axis)] = {range[0], range[1]};
   }
   const bool has_reference = values.has("crack.reference");
   const std::string problem = mesh::check_crack(box, crack, !has_reference);
@@ -566,11 +581,6 @@ std::vector<MaterialEntrySection> materials_from(const Values& values, bool gmsh
   return materials;
 }
 
-std::optional<double> optional_number(const Values& values, const std::string& path) {
-  if (!values.has(path) || values.is_word(path)) return std::nullopt;
-  return values.number(path);
-}
-
 /// The given keys among `keys` below `parent`, e.g. "face and point".
 std::vector<std::string> given_keys(const Values& values, const std::string& parent,
                                     const std::vector<std::string>& keys) {
@@ -609,99 +619,87 @@ void check_file_safe_name(const Values& values, const std::string& path, const s
               "'" + shown + "'");
 }
 
-/// Exactly one of `keys` must be given below `parent`.
-std::string exactly_one(const Values& values, const std::string& parent, const std::vector<std::string>& keys) {
-  const std::vector<std::string> given = given_keys(values, parent, keys);
-  if (given.size() != 1) {
-    std::string expected = "exactly one of ";
-    for (std::size_t i = 0; i < keys.size(); ++i) expected += (i ? ", " : "") + keys[i];
-    values.fail(parent, expected, and_list(given));
+/// The table's declaration of the map (or list of maps) at a dotted key path (`transient.reduced`).
+const Param& declared(const std::string& path) {
+  const Param* param = &scene_parameters();
+  for (std::size_t start = 0; start <= path.size();) {
+    const std::size_t dot = std::min(path.find('.', start), path.size());
+    param = param->child(path.substr(start, dot - start));
+    if (!param) throw std::logic_error("no declared map " + path);
+    start = dot + 1;
   }
-  return given[0];
+  return *param;
 }
 
-TransientSection transient_from(const Values& values, const Scene& scene) {
-  TransientSection transient;
-  if (values.has("transient.excitation")) {
-    ExcitationSection excitation;
-    const std::string where = exactly_one(values, "transient.excitation", {"face", "group", "point"});
-    if (where == "face") excitation.face = values.word("transient.excitation.face");
-    if (where == "group") excitation.group = values.word("transient.excitation.group");
-    if (where == "point") excitation.point = vec3(values.numbers("transient.excitation.point"));
-    excitation.direction = axis_index(values.word("transient.excitation.direction"));
-    excitation.amplitude = values.number("transient.excitation.amplitude");
-    excitation.kind = values.word("transient.excitation.kind") == "pulse" ? ExcitationKind::pulse : ExcitationKind::harmonic;
-    excitation.ramp_periods = values.number("transient.excitation.ramp_periods");
-    if (excitation.kind == ExcitationKind::harmonic) {
-      if (!values.has("transient.excitation.frequency")) {
-        values.fail("transient.excitation.frequency", "a frequency (in Hz, or {mode: n, ratio: r}) for a harmonic "
-                    "excitation", "nothing");
-      }
-      const std::string given = exactly_one(values, "transient.excitation.frequency", {"hz", "mode"});
-      if (given == "hz") excitation.frequency_hz = values.number("transient.excitation.frequency.hz");
-      if (given == "mode") excitation.mode = values.integer("transient.excitation.frequency.mode");
-      excitation.ratio = values.number("transient.excitation.frequency.ratio");
-      excitation.of = mode_of_named(values.word("transient.excitation.frequency.of"));
-      if (excitation.of != ModeOf::uncracked && !scene.has_crack()) {
-        values.fail("transient.excitation.frequency.of", "uncracked (the scene has no crack)", mode_of_name(excitation.of));
-      }
-    } else {
-      if (!values.has("transient.excitation.duration")) {
-        values.fail("transient.excitation.duration", "the duration of the pulse", "nothing");
-      }
-      excitation.duration = values.number("transient.excitation.duration");
-    }
-    transient.excitation = excitation;
+/// Fills the fields of `section` that the table binds below `path`, a dotted path of maps
+/// (`transient.reduced`): each key with `.to(&Section::field)` is read here, nowhere else.
+template <class S>
+void read_section(const Values& values, const std::string& path, S& section) {
+  read_bound(declared(path), values, path, section);
+}
+
+/// Fills the fields of `section` bound in entry `index` of the list of maps at `path`
+/// (`transient.probes`).
+template <class S>
+void read_entry(const Values& values, const std::string& path, int index, S& section) {
+  read_bound(declared(path), values, path + "[" + std::to_string(index) + "]", section);
+}
+
+/// `transient.excitation`: a frequency for a harmonic drive, a duration for a pulse, nothing else.
+ExcitationSection excitation_from(const Values& values, const Scene& scene) {
+  ExcitationSection excitation;
+  read_section(values, "transient.excitation", excitation);
+  const bool harmonic = excitation.kind == ExcitationKind::harmonic;
+  const bool has_frequency = values.has("transient.excitation.frequency");
+  if (harmonic && !has_frequency) {
+    values.fail("transient.excitation.frequency", "a frequency (in Hz, or {mode: n, ratio: r}) for a harmonic "
+                "excitation", "nothing");
   }
-  if (values.has("transient.damping")) {
-    DampingSection& damping = transient.damping;
-    const std::vector<std::string> coefficients = given_keys(values, "transient.damping", {"alpha", "beta"});
-    if (values.has("transient.damping.ratio") == !coefficients.empty()) {
-      values.fail("transient.damping", "either ratio (with at) or alpha and/or beta",
-                  values.has("transient.damping.ratio") ? "ratio and " + and_list(coefficients) : "none");
-    }
-    if (values.has("transient.damping.ratio")) {
-      damping.ratio = values.number("transient.damping.ratio");
-      if (!values.has("transient.damping.at")) {
-        values.fail("transient.damping.at", "the frequency of the damping ratio (in Hz or {mode: n})", "nothing");
-      }
-      const std::string given = exactly_one(values, "transient.damping.at", {"hz", "mode"});
-      if (given == "hz") damping.at_hz = values.number("transient.damping.at.hz");
-      if (given == "mode") damping.at_mode = values.integer("transient.damping.at.mode");
-      damping.type = values.word("transient.damping.type") == "stiffness" ? DampingType::stiffness : DampingType::mass;
-    } else {
-      if (values.has("transient.damping.alpha")) damping.alpha = values.number("transient.damping.alpha");
-      if (values.has("transient.damping.beta")) damping.beta = values.number("transient.damping.beta");
-    }
+  if (!harmonic && has_frequency) {
+    values.fail("transient.excitation.frequency", "no frequency with kind: pulse (duration sets its band)",
+                "a frequency");
   }
-  const std::vector<std::string> lengths = given_keys(values, "transient", {"periods", "duration"});
-  if (lengths.size() != 1) values.fail("transient", "exactly one of periods, duration", and_list(lengths));
-  transient.periods = optional_number(values, "transient.periods");
-  transient.duration = optional_number(values, "transient.duration");
-  if (transient.periods && !(transient.excitation && transient.excitation->kind == ExcitationKind::harmonic)) {
-    values.fail("transient.periods", "duration (periods needs a harmonic excitation)", "periods");
+  if (harmonic && excitation.of != ModeOf::uncracked && !scene.has_crack()) {
+    values.fail("transient.excitation.frequency.of", "uncracked (the scene has no crack)", mode_of_name(excitation.of));
   }
-  transient.time_step = optional_number(values, "transient.time_step");
-  transient.safety_factor = values.number("transient.safety_factor");
-  transient.force_time_step = values.flag("transient.force_time_step");
-  transient.variant = values.word("transient.variant") == "uncracked" ? mesh::Variant::uncracked : mesh::Variant::open;
-  const std::string model = values.word("transient.model");
-  transient.model = model == "full" ? TransientModel::full : model == "reduced" ? TransientModel::reduced
-                                                                                : TransientModel::automatic;
-  if (!values.is_word("transient.reduced.modes")) transient.reduced.modes = values.integer("transient.reduced.modes");
-  if (!values.is_word("transient.reduced.max_frequency")) {
-    transient.reduced.max_frequency_hz = values.number("transient.reduced.max_frequency");
+  if (harmonic && values.has("transient.excitation.duration")) {
+    values.fail("transient.excitation.duration", "no duration with kind: harmonic (the run's length is "
+                "transient.periods or transient.duration)", format_number(excitation.duration));
   }
-  transient.reduced.steps_per_period = values.integer("transient.reduced.steps_per_period");
-  transient.reduced.residual_flexibility = values.flag("transient.reduced.residual_flexibility");
+  if (!harmonic && !values.has("transient.excitation.duration")) {
+    values.fail("transient.excitation.duration", "the duration of the pulse", "nothing");
+  }
+  return excitation;
+}
+
+/// `transient.damping`: a ratio at a frequency, or alpha and/or beta.
+DampingSection damping_from(const Values& values) {
+  const std::vector<std::string> coefficients = given_keys(values, "transient.damping", {"alpha", "beta"});
+  if (values.has("transient.damping.ratio") == !coefficients.empty()) {
+    values.fail("transient.damping", "either ratio (with at) or alpha and/or beta",
+                values.has("transient.damping.ratio") ? "ratio and " + and_list(coefficients) : "none");
+  }
+  if (values.has("transient.damping.ratio") && !values.has("transient.damping.at")) {
+    values.fail("transient.damping.at", "the frequency of the damping ratio (in Hz or {mode: n})", "nothing");
+  }
+  if (!values.has("transient.damping.ratio") && values.has("transient.damping.at")) {
+    values.fail("transient.damping.at", "no frequency without a damping ratio (alpha and beta are given as they are)",
+                "a frequency");
+  }
+  DampingSection damping;
+  read_section(values, "transient.damping", damping);
+  return damping;
+}
+
+/// `transient.probes`: file-safe distinct names; a crack opening needs a crack and takes no component or side.
+std::vector<ProbeSection> probes_from(const Values& values, const Scene& scene) {
+  std::vector<ProbeSection> probes;
   for (int i = 0; i < values.count("transient.probes"); ++i) {
     const std::string entry = "transient.probes[" + std::to_string(i) + "]";
     ProbeSection probe;
-    probe.name = values.word(entry + ".name");
+    read_entry(values, "transient.probes", i, probe);
     check_file_safe_name(values, entry + ".name", probe.name);
-    const std::string where = exactly_one(values, entry, {"point", "crack_opening"});
-    probe.point = vec3(values.numbers(entry + "." + where));
-    if (where == "crack_opening") {
+    if (values.has(entry + ".crack_opening")) {
       probe.crack_opening = true;
       if (!scene.has_crack()) values.fail(entry + ".crack_opening", "a scene with a crack", "a body without one");
       if (values.has(entry + ".component")) {
@@ -713,39 +711,32 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
                     "'" + values.word(entry + ".side") + "'");
       }
     }
-    if (values.has(entry + ".side")) probe.side = values.word(entry + ".side");
-    if (values.has(entry + ".component")) probe.component = axis_index(values.word(entry + ".component"));
-    for (const ProbeSection& earlier : transient.probes) {
+    for (const ProbeSection& earlier : probes) {
       if (earlier.name == probe.name) values.fail(entry + ".name", "a name no other probe has", "'" + probe.name + "' again");
     }
-    transient.probes.push_back(probe);
+    probes.push_back(probe);
   }
-  if (values.has("transient.release")) {
-    ReleaseSection release;
-    release.kind = exactly_one(values, "transient.release", {"static", "mode"});
-    if (release.kind == "static") {
-      const std::string load = "transient.release.static";
-      const std::string where = exactly_one(values, load, {"face", "group", "point"});
-      if (where == "face") release.face = values.word(load + ".face");
-      if (where == "group") release.group = values.word(load + ".group");
-      if (where == "point") release.point = vec3(values.numbers(load + ".point"));
-      release.direction = axis_index(values.word(load + ".direction"));
-      release.amplitude = values.number(load + ".amplitude");
-    } else {
-      release.mode = values.integer("transient.release.mode.number");
-      release.variant = values.word("transient.release.mode.variant") == "open" ? mesh::Variant::open : mesh::Variant::uncracked;
-      release.amplitude = values.number("transient.release.mode.amplitude");
-      if (release.variant == mesh::Variant::open && !scene.has_crack()) {
-        values.fail("transient.release.mode.variant", "uncracked (the scene has no crack)", "'open'");
-      }
-    }
-    transient.release = release;
+  return probes;
+}
+
+/// `transient.release`: a static deflection or a mode shape (exactly one of them: the table's rule).
+ReleaseSection release_from(const Values& values, const Scene& scene) {
+  ReleaseSection release;
+  release.kind = values.has("transient.release.mode") ? ReleaseKind::mode : ReleaseKind::static_deflection;
+  read_section(values, "transient.release", release);
+  if (release.kind == ReleaseKind::mode && release.variant == mesh::Variant::open && !scene.has_crack()) {
+    values.fail("transient.release.mode.variant", "uncracked (the scene has no crack)", "'open'");
   }
+  return release;
+}
+
+/// `transient.initial`: fields over coordinate ranges.
+std::vector<InitialSection> initial_from(const Values& values) {
+  std::vector<InitialSection> fields;
   for (int i = 0; i < values.count("transient.initial"); ++i) {
     const std::string entry = "transient.initial[" + std::to_string(i) + "]";
     InitialSection initial;
-    initial.velocity = vec3(values.numbers(entry + ".velocity"));
-    initial.displacement = vec3(values.numbers(entry + ".displacement"));
+    read_entry(values, "transient.initial", i, initial);
     for (int axis = 0; axis < 3; ++axis) {
       const std::string key = entry + "." + kAxes[axis];
       if (!values.has(key)) continue;
@@ -755,19 +746,30 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
       }
       initial.range[axis] = std::array<double, 2>{range[0], range[1]};
     }
-    transient.initial.push_back(initial);
+    fields.push_back(initial);
   }
-  transient.snapshots = values.integer("transient.snapshots.count");
-  if (transient.model == TransientModel::reduced) {
-    if (transient.time_step) {
-      values.fail("transient.time_step", "auto with transient.model: reduced (its step is set by "
-                  "transient.reduced.steps_per_period)", format_number(*transient.time_step));
-    }
+  return fields;
+}
+
+TransientSection transient_from(const Values& values, const Scene& scene) {
+  TransientSection transient;
+  read_section(values, "transient", transient);
+  read_section(values, "transient.reduced", transient.reduced);
+  if (values.has("transient.excitation")) transient.excitation = excitation_from(values, scene);
+  if (values.has("transient.damping")) transient.damping = damping_from(values);
+  if (transient.periods && !(transient.excitation && transient.excitation->kind == ExcitationKind::harmonic)) {
+    values.fail("transient.periods", "duration (periods needs a harmonic excitation)", "periods");
+  }
+  transient.probes = probes_from(values, scene);
+  if (values.has("transient.release")) transient.release = release_from(values, scene);
+  transient.initial = initial_from(values);
+  if (transient.model == TransientModel::reduced && transient.time_step) {
+    values.fail("transient.time_step", "auto with transient.model: reduced (its step is set by "
+                "transient.reduced.steps_per_period)", format_number(*transient.time_step));
   }
   transient.history_samples_per_period = values.is_word("transient.history.samples_per_period")
                                              ? 0
                                              : values.integer("transient.history.samples_per_period");
-  transient.progress = values.flag("transient.progress");
   if (transient.variant == mesh::Variant::open && !scene.has_crack()) transient.variant = mesh::Variant::uncracked;
   return transient;
 }
@@ -776,27 +778,13 @@ SpectrumSection spectrum_from(const Values& values, const Scene& scene) {
   if (!scene.transient) values.fail("spectrum", "a transient section to analyse", "none");
   if (scene.transient->probes.empty()) values.fail("transient.probes", "at least one probe for the spectrum", "none");
   SpectrumSection spectrum;
-  spectrum.harmonics = values.integer("spectrum.harmonics");
-  spectrum.subharmonics = values.flag("spectrum.subharmonics");
-  spectrum.tolerance = values.number("spectrum.steady_state.tolerance");
-  spectrum.min_periods = values.integer("spectrum.steady_state.min_periods");
-  spectrum.window_periods = values.integer("spectrum.steady_state.window_periods");
-  spectrum.window = values.word("spectrum.window");
-  spectrum.ringdown_start = optional_number(values, "spectrum.ringdown.start");
-  spectrum.ringdown_window_periods = values.integer("spectrum.ringdown.window_periods");
-  spectrum.plots = values.flag("spectrum.plots");
+  read_section(values, "spectrum", spectrum);
   return spectrum;
 }
 
 SweepFrequencySection sweep_end_from(const Values& values, const Scene& scene, const std::string& key) {
   SweepFrequencySection end;
-  if (exactly_one(values, key, {"hz", "mode"}) == "hz") {
-    end.hz = values.number(key + ".hz");
-  } else {
-    end.mode = values.integer(key + ".mode");
-  }
-  end.ratio = values.number(key + ".ratio");
-  end.of = mode_of_named(values.word(key + ".of"));
+  read_section(values, key, end);
   if (end.of != ModeOf::uncracked && !scene.has_crack())
     values.fail(key + ".of", "uncracked (the scene has no crack)", mode_of_name(end.of));
   return end;
@@ -805,7 +793,7 @@ SweepFrequencySection sweep_end_from(const Values& values, const Scene& scene, c
 SweepSection sweep_from(const Values& values, const Scene& scene) {
   for (std::size_t i = 0; scene.transient && i < scene.transient->probes.size(); ++i) {
     const ProbeSection& probe = scene.transient->probes[i];
-    if (!probe.crack_opening && probe.side.empty()) continue;
+    if (!probe.crack_opening && !probe.side) continue;
     values.fail("transient.probes[" + std::to_string(i) + "]" + (probe.crack_opening ? ".crack_opening" : ".side"),
                 "a plain point probe in a scene with sweep: (the sweep's outputs are nearest-node displacements)",
                 "this key");
@@ -824,31 +812,19 @@ SweepSection sweep_from(const Values& values, const Scene& scene) {
   if (same_reference && from_value == to_value) {
     values.fail("sweep.frequency.to", "a frequency other than sweep.frequency.from", "the same");
   }
-  sweep.harmonics = values.integer("sweep.harmonics");
-  sweep.subharmonic = values.integer("sweep.subharmonic");
-  sweep.method = values.word("sweep.method") == "stepped_sine" ? SweepMethod::stepped_sine : SweepMethod::harmonic_balance;
-  sweep.stability = values.flag("sweep.stability");
+  read_section(values, "sweep", sweep);
   if (sweep.stability && scene.contact.friction > 0.0) {
     values.fail("sweep.stability", "false with friction (Hill's method is frictionless)", "true");
   }
-  sweep.points = values.integer("sweep.points");
-  sweep.tolerance = values.number("sweep.tolerance");
-  sweep.max_periods = values.integer("sweep.max_periods");
-  const std::string solver = values.word("sweep.solver");
-  sweep.solver = solver == "dense" ? LinearSolver::dense : solver == "krylov" ? LinearSolver::krylov : LinearSolver::automatic;
-  sweep.plots = values.flag("sweep.plots");
-  if (values.has("sweep.solve_at")) {
-    if (sweep.method != SweepMethod::harmonic_balance)
-      values.fail("sweep.solve_at", "sweep.method: harmonic_balance (stepped_sine runs at its own frequencies)",
-                  "sweep.method: " + method_name(sweep.method));
-    sweep.solve_at_hz = values.numbers("sweep.solve_at");
+  if (values.has("sweep.solve_at") && sweep.method != SweepMethod::harmonic_balance) {
+    values.fail("sweep.solve_at", "sweep.method: harmonic_balance (stepped_sine runs at its own frequencies)",
+                "sweep.method: " + method_name(sweep.method));
   }
   return sweep;
 }
 
-Scene scene_from(const Values& values) {
-  Scene scene;
-  scene.file = values.file();
+/// `mesh:`: the Gmsh file (checked to be a file), or the box and its grading.
+void mesh_from(const Values& values, Scene& scene) {
   if (values.has("mesh.gmsh")) {
     scene.gmsh_file = mesh_file_path(values.file(), values.word("mesh.gmsh"));
     std::error_code error;
@@ -868,8 +844,7 @@ Scene scene_from(const Values& values) {
       const std::string key = "mesh.box.lines." + kAxes[axis];
       if (values.has(key)) scene.box.extra_lines[axis] = values.numbers(key);
     }
-    const std::string mode = values.word("mesh.box.grading.mode");
-    scene.grading.mode = mode == "always" ? GradingMode::always : mode == "none" ? GradingMode::none : GradingMode::automatic;
+    scene.grading.mode = values.choice("mesh.box.grading.mode", kGradingModeWords);
     mesh::Grading grading;
     grading.layers = mesh::kAutoLayers;
     if (!values.is_word("mesh.box.grading.layers")) grading.layers = values.integer("mesh.box.grading.layers");
@@ -880,21 +855,11 @@ Scene scene_from(const Values& values) {
     }
     scene.grading.grading = grading;
   }
+}
 
-  const bool has_materials = values.has("materials") && values.count("materials") > 0;
-  if (values.has("material") && has_materials) {
-    values.fail("materials", "either material (one for the whole body) or materials", "both");
-  }
-  if (has_materials) {
-    scene.materials = materials_from(values, !scene.gmsh_file.empty());
-  } else if (!values.has("material")) {
-    values.fail("material", describe(*scene_parameters().child("material")), "nothing");
-  } else {
-    scene.material.young = values.number("material.E");
-    scene.material.poisson = values.number("material.nu");
-    scene.material.density = values.number("material.rho");
-  }
-
+/// `boundary:`, each entry on a box face or a mesh group.
+std::vector<BoundarySection> boundary_from(const Values& values) {
+  std::vector<BoundarySection> boundary;
   for (int i = 0; i < values.count("boundary"); ++i) {
     const std::string entry = "boundary[" + std::to_string(i) + "]";
     BoundarySection section;
@@ -907,14 +872,16 @@ Scene scene_from(const Values& values) {
     } else {
       section.group = values.word(entry + ".group");
     }
-    for (const std::string& axis : values.words(entry + ".fix"))
-      section.components.push_back(axis_index(axis));
+    section.components = values.choices(entry + ".fix", kAxisWords);
     section.values = values.numbers(entry + ".value");
     section.line = std::max(values.line(entry), 0);
-    scene.boundary.push_back(section);
+    boundary.push_back(section);
   }
-  check_boundary(values, scene.boundary);
+  return boundary;
+}
 
+/// `crack:` as a mesh group, or as a plane and region (with its reference) of a box.
+void crack_section_from(const Values& values, Scene& scene) {
   if (values.has("crack")) {
     if (values.has("crack.group")) {
       if (values.has("crack.plane") || values.has("crack.region") || values.has("crack.reference")) {
@@ -939,39 +906,11 @@ Scene scene_from(const Values& values) {
       scene.crack_reference = reference_crack_from(values, scene.box, *scene.crack);
     }
   }
+}
 
-  scene.has_modal_section = values.has("modal");
-  scene.modal.modes = values.integer("modal.modes");
-  scene.modal.variants = values.words("modal.variants");
-  scene.modal.solver = values.word("modal.solver");
-  scene.modal.mass = values.word("modal.mass");
-  for (std::size_t i = 0; i < scene.modal.variants.size(); ++i) {
-    if (scene.modal.variants[i] == "open" && !scene.has_crack()) {
-      values.fail("modal.variants[" + std::to_string(i) + "]", "uncracked (the scene has no crack)",
-                  "'open'");
-    }
-  }
-  if (values.has("crack")) {
-    scene.contact.penalty = optional_number(values, "crack.contact.penalty");
-    scene.contact.friction = values.number("crack.contact.friction");
-    scene.contact.integration = values.word("crack.contact.integration");
-    scene.contact.model = values.word("crack.contact.model");
-  }
-  if (values.has("transient")) scene.transient = transient_from(values, scene);
-  if (values.has("spectrum")) scene.spectrum = spectrum_from(values, scene);
-  if (values.has("sweep")) scene.sweep = sweep_from(values, scene);
-  if (values.has("accuracy")) {
-    if (!scene.spectrum && !scene.sweep && !values.has("modal")) {
-      values.fail("accuracy", "a spectrum:, sweep: or modal: section (the accuracy estimates are of their signatures "
-                  "and frequencies)", "none");
-    }
-    const std::string estimate = values.word("accuracy.estimate");
-    scene.accuracy.estimate = estimate == "on" ? EstimateChoice::on : estimate == "off" ? EstimateChoice::off : EstimateChoice::automatic;
-    scene.accuracy.tolerance = optional_number(values, "accuracy.tolerance");
-    scene.accuracy.budget_s = values.number("accuracy.budget");
-    scene.accuracy.quantities = values.words("accuracy.quantities");
-    scene.has_accuracy_section = true;
-  }
+/// The lines of the keys the pipeline may name after loading (Scene::key_lines).
+std::map<std::string, int> key_lines_of(const Values& values, const Scene& scene) {
+  std::map<std::string, int> lines;
   std::vector<std::string> named = {"mesh.box.cells", "mesh.box.order", "mesh.gmsh", "transient.periods",
                                     "transient.duration", "transient.time_step", "transient.snapshots.count", "transient.model",
                                     "transient.history.samples_per_period", "transient.excitation.point",
@@ -983,8 +922,56 @@ Scene scene_from(const Values& values) {
         named.push_back("transient.probes[" + std::to_string(i) + "]." + key);
   }
   for (const std::string& key : named) {
-    if (values.has(key)) scene.key_lines[key] = values.line(key);
+    if (values.has(key)) lines[key] = values.line(key);
   }
+  return lines;
+}
+
+Scene scene_from(const Values& values) {
+  Scene scene;
+  scene.file = values.file();
+  mesh_from(values, scene);
+
+  const bool has_materials = values.has("materials") && values.count("materials") > 0;
+  if (values.has("material") && has_materials) {
+    values.fail("materials", "either material (one for the whole body) or materials", "both");
+  }
+  if (has_materials) {
+    scene.materials = materials_from(values, !scene.gmsh_file.empty());
+  } else if (!values.has("material")) {
+    values.fail("material", describe(*scene_parameters().child("material")), "nothing");
+  } else {
+    read_section(values, "material", scene.material);
+  }
+
+  scene.boundary = boundary_from(values);
+  check_boundary(values, scene.boundary);
+
+  crack_section_from(values, scene);
+
+  scene.has_modal_section = values.has("modal");
+  read_section(values, "modal", scene.modal);
+  for (std::size_t i = 0; i < scene.modal.variants.size(); ++i) {
+    if (scene.modal.variants[i] == mesh::Variant::open && !scene.has_crack()) {
+      values.fail("modal.variants[" + std::to_string(i) + "]", "uncracked (the scene has no crack)",
+                  "'open'");
+    }
+  }
+  if (values.has("crack")) {
+    read_section(values, "crack.contact", scene.contact);
+  }
+  if (values.has("transient")) scene.transient = transient_from(values, scene);
+  if (values.has("spectrum")) scene.spectrum = spectrum_from(values, scene);
+  if (values.has("sweep")) scene.sweep = sweep_from(values, scene);
+  if (values.has("accuracy")) {
+    if (!scene.spectrum && !scene.sweep && !values.has("modal")) {
+      values.fail("accuracy", "a spectrum:, sweep: or modal: section (the accuracy estimates are of their signatures "
+                  "and frequencies)", "none");
+    }
+    read_section(values, "accuracy", scene.accuracy);
+    scene.has_accuracy_section = true;
+  }
+  scene.key_lines = key_lines_of(values, scene);
   return scene;
 }
 
@@ -998,7 +985,7 @@ std::string reduced_route_refusal(const Scene& scene, int ranks) {
   }
   if (!scene.spectrum) return "no spectrum: section (no signature to compute)";
   if (!scene.has_crack() || transient.variant != mesh::Variant::open) return "no crack to breathe (a linear run)";
-  if (scene.contact.model != "penalty") return "crack.contact.model: none (a linear run)";
+  if (scene.contact.model != ContactModel::penalty) return "crack.contact.model: none (a linear run)";
   if (transient.time_step) return "an explicit transient.time_step";
   if (!transient.initial.empty()) return "transient.initial fields (the full model takes them as given)";
   if (transient.release) return "a transient.release (the full model starts from it as given)";
@@ -1007,7 +994,7 @@ std::string reduced_route_refusal(const Scene& scene, int ranks) {
 
 bool takes_route_mesh(const Scene& scene, const std::string& command) {
   if (!scene.gmsh_file.empty() || !scene.transient || scene.transient->model != TransientModel::automatic) return false;
-  if (command == "sweep") return scene.sweep && scene.has_crack() && scene.contact.model == "penalty";
+  if (command == "sweep") return scene.sweep && scene.has_crack() && scene.contact.model == ContactModel::penalty;
   return command == "run" && reduced_route_refusal(scene, 1).empty();
 }
 
@@ -1056,7 +1043,7 @@ const Param& study_parameters() {
       map_of("vary", "Scene keys to vary, each by its key path (`crack.region.z`, `boundary[0].value`): a list of "
                      "values, or {from, to, steps} for evenly spaced numbers or number lists.", {}).required(),
       choice("mode", "grid: every combination of the values, the first key slowest; zip: the i-th values of every "
-                     "key together (lists of equal length).", {"grid", "zip"}).defaults_to("grid"),
+                     "key together (lists of equal length).", kStudyModeWords).defaults_to("grid"),
       choice("outputs", "What each case runs: modal -> `crackle modal`, spectrum -> `crackle run`, sweep -> "
                         "`crackle sweep` (the scene needs a sweep: section); modal with spectrum or sweep and a "
                         "`modal:` section: not run apart, as those write modal.json too.",
@@ -1093,7 +1080,7 @@ const Param& identify_parameters() {
         integer("points", "Grid points per unknown.").at_least(3).defaults_to("7"),
       }),
       choice("sigma", "scaled: covariance s^2 (J^T J)^-1 with s^2 = chi^2/(n - k) and Student's t; trusted: s^2 = 1 and "
-                      "the normal quantile.", {"scaled", "trusted"}).defaults_to("scaled"),
+                      "the normal quantile.", kScaledSigmaWords).defaults_to("scaled"),
       map_of("truth", "A synthetic test's true value of every unknown {key: value}: identify.json `truth` then gives the "
                       "error, whether each 95 % interval holds the truth, and the Cramer-Rao bound there (the "
                       "Gauss-Newton standard deviation at the truth, sigmas trusted).", {}),
@@ -1109,10 +1096,12 @@ const Param& plan_parameters() {
       text("size", "The prior key that measures the crack's size, along which the smallest detectable crack is "
                    "interpolated (default: the last key)."),
       map_of("sensors", "Candidate sensor points: a face sampled on a grid, or a list of points.", {
-        choice("face", "A face of the box whose grid of points are the candidates.", {"x-", "x+", "y-", "y+", "z-", "z+"}),
+        choice("face", "A face of the box whose grid of points are the candidates.",
+               {mesh::box_face_names().begin(), mesh::box_face_names().end()}),
         number("spacing", "Spacing of the face's grid (with face; at most 2000 points).").with_unit("m").above(0),
         map_of("points", "The candidate points [[x, y, z], ...] instead of a face.", {}),
-        choice("component", "The displacement component a sensor measures (default: the excitation's direction).", {"x", "y", "z"}),
+        choice("component", "The displacement component a sensor measures (default: the excitation's direction).",
+               kAxisWords),
       }).required(),
       map_of("drives", "Candidate drives: the points of the scene's harmonic excitation (its direction, amplitude and "
                        "damping) and its frequencies.", {
@@ -1161,26 +1150,6 @@ std::string scene_format_markdown() {
          "`crackle plan scene.yaml -o DIR` ranks candidate sensors, drive points and drive frequencies for the "
          "cracks of the prior (README, \"Test planning\").\n\n" +
          markdown_table(plan_parameters());
-}
-
-std::string mode_of_name(ModeOf of) {
-  return of == ModeOf::bilinear ? "bilinear" : of == ModeOf::open ? "open" : "uncracked";
-}
-
-std::string excitation_kind_name(ExcitationKind kind) {
-  return kind == ExcitationKind::pulse ? "pulse" : "harmonic";
-}
-
-std::string grading_mode_name(GradingMode mode) {
-  return mode == GradingMode::always ? "always" : mode == GradingMode::none ? "none" : "auto";
-}
-
-std::string method_name(SweepMethod method) {
-  return method == SweepMethod::stepped_sine ? "stepped_sine" : "harmonic_balance";
-}
-
-std::string model_name(TransientModel model) {
-  return model == TransientModel::full ? "full" : model == TransientModel::reduced ? "reduced" : "auto";
 }
 
 }  // namespace crackle::scene

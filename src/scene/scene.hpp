@@ -64,31 +64,55 @@ struct BoundarySection {
   int line = 0;                 ///< 1-based line in the scene file, for messages
 };
 
+/// The axes x, y, z as the indices 0, 1, 2 (directions, components, crack normals).
+inline constexpr Words<int, 3> kAxisWords{{{"x", 0}, {"y", 1}, {"z", 2}}};
+
+/// `modal.solver`: ARPACK on one process and SLEPc under mpirun or with SLEPc options (auto), or
+/// the one named (pipeline/modal_command.cpp resolves auto).
+enum class ModalSolver { automatic, slepc, arpack };
+inline constexpr Words<ModalSolver, 3> kModalSolverWords{
+    {{"auto", ModalSolver::automatic}, {"slepc", ModalSolver::slepc}, {"arpack", ModalSolver::arpack}}};
+
+/// `modal.mass`: the consistent or the lumped mass matrix.
+enum class MassMatrix { consistent, lumped };
+inline constexpr Words<MassMatrix, 2> kMassMatrixWords{
+    {{"consistent", MassMatrix::consistent}, {"lumped", MassMatrix::lumped}}};
+
 /// The `modal:` section (issue 3).
 struct ModalSection {
   int modes = defaults::kModes;
-  std::vector<std::string> variants;  ///< "uncracked" and/or "open"; defaulted by the loader
-  std::string solver = "auto";        ///< auto | slepc | arpack
-  std::string mass = "consistent";    ///< consistent | lumped
+  std::vector<mesh::Variant> variants;  ///< uncracked and/or open; defaulted by the loader
+  ModalSolver solver = ModalSolver::automatic;
+  MassMatrix mass = MassMatrix::consistent;
 };
+
+/// `crack.contact.model`: penalty (the faces touch: a breathing crack) or none (the faces pass
+/// through each other: the open body, a linear run).
+enum class ContactModel { penalty, none };
+inline constexpr Words<ContactModel, 2> kContactModelWords{
+    {{"penalty", ContactModel::penalty}, {"none", ContactModel::none}}};
 
 /// `crack.contact`: penalty contact options of transient runs.
 struct ContactSection {
   std::optional<double> penalty;  ///< eps_N [Pa/m]; empty: auto
   double friction = 0.0;          ///< Coulomb mu
-  std::string integration = "implicit";  ///< implicit | explicit
-  std::string model = "penalty";         ///< penalty | none (no contact: the faces pass through)
+  ContactIntegration integration = ContactIntegration::implicit;  ///< core/choices.hpp
+  ContactModel model = ContactModel::penalty;
 };
 
 /// `transient.excitation`.
 /// Whose mode a frequency `{mode: n, ratio: r}` is relative to (`of`): the bilinear frequency of a
 /// paired mode, the uncracked body's or the open body's.
 enum class ModeOf { bilinear, uncracked, open };
-std::string mode_of_name(ModeOf of);
+inline constexpr Words<ModeOf, 3> kModeOfWords{
+    {{"bilinear", ModeOf::bilinear}, {"uncracked", ModeOf::uncracked}, {"open", ModeOf::open}}};
+inline std::string mode_of_name(ModeOf of) { return text_of(kModeOfWords, of); }
 
 /// `transient.excitation.kind`: harmonic (sin(2 pi f t) ramped in) or pulse (an impact-hammer blow).
 enum class ExcitationKind { harmonic, pulse };
-std::string excitation_kind_name(ExcitationKind kind);
+inline constexpr Words<ExcitationKind, 2> kExcitationKindWords{
+    {{"harmonic", ExcitationKind::harmonic}, {"pulse", ExcitationKind::pulse}}};
+inline std::string excitation_kind_name(ExcitationKind kind) { return text_of(kExcitationKindWords, kind); }
 
 struct ExcitationSection {
   std::string face;           ///< box face, or empty
@@ -108,6 +132,8 @@ struct ExcitationSection {
 /// `transient.damping`: either a ratio at a frequency (or mode) or alpha/beta directly.
 /// `transient.damping.type` of a stated ratio: mass- or stiffness-proportional Rayleigh damping.
 enum class DampingType { mass, stiffness };
+inline constexpr Words<DampingType, 2> kDampingTypeWords{
+    {{"mass", DampingType::mass}, {"stiffness", DampingType::stiffness}}};
 
 struct DampingSection {
   std::optional<double> ratio;
@@ -117,12 +143,17 @@ struct DampingSection {
   double alpha = 0.0, beta = 0.0;
 };
 
+/// `transient.probes[].side`: which copy of a split crack node a probe records, the lower (the
+/// plus face of MODEL.md eq. 9) or the upper (the minus face).
+enum class FaceSide { lower, upper };
+inline constexpr Words<FaceSide, 2> kFaceSideWords{{{"lower", FaceSide::lower}, {"upper", FaceSide::upper}}};
+
 struct ProbeSection {
   std::string name;
   Vec3 point = Vec3::Zero();
   int component = -1;  ///< -1: the excitation direction
   bool crack_opening = false;  ///< the crack pair nearest `point` (gap, slip, state), not a node
-  std::string side;            ///< "", "lower" or "upper": which copy of a split crack node
+  std::optional<FaceSide> side;  ///< which copy of a split crack node; empty: the nearest node
 };
 
 /// One entry of `transient.initial`.
@@ -132,9 +163,14 @@ struct InitialSection {
   std::array<std::optional<std::array<double, 2>>, 3> range;  ///< per axis [m]; none: everywhere
 };
 
+/// Which of `transient.release`'s keys is given: static (a static deflection) or mode (a mode shape).
+enum class ReleaseKind { static_deflection, mode };
+inline constexpr Words<ReleaseKind, 2> kReleaseKindWords{
+    {{"static", ReleaseKind::static_deflection}, {"mode", ReleaseKind::mode}}};
+
 /// `transient.release`: the run starts at rest from a static deflection or a mode shape.
 struct ReleaseSection {
-  std::string kind;           ///< static | mode
+  ReleaseKind kind = ReleaseKind::static_deflection;
   std::string face;           ///< static: box face, or empty
   std::string group;          ///< static: mesh group, or empty
   std::optional<Vec3> point;  ///< static: nearest node, or empty
@@ -155,8 +191,10 @@ struct ReducedSection {
 
 /// transient.model: the full explicit model, the reduced model, or auto (the route chooses).
 enum class TransientModel { full, reduced, automatic };
+inline constexpr Words<TransientModel, 3> kTransientModelWords{
+    {{"full", TransientModel::full}, {"reduced", TransientModel::reduced}, {"auto", TransientModel::automatic}}};
 /// The scene's word for it: "full", "reduced", "auto".
-std::string model_name(TransientModel model);
+inline std::string model_name(TransientModel model) { return text_of(kTransientModelWords, model); }
 
 struct TransientSection {
   std::optional<ExcitationSection> excitation;
@@ -186,7 +224,7 @@ struct SpectrumSection {
   double tolerance = 1e-3;
   int min_periods = 20;
   int window_periods = 10;
-  std::string window = "auto";
+  Window window = Window::automatic;  ///< of the amplitude spectrum (core/choices.hpp)
   bool plots = true;
   std::optional<double> ringdown_start;  ///< [s]; empty: auto (0, or the end of a pulse)
   int ringdown_window_periods = 4;
@@ -204,7 +242,9 @@ struct SweepFrequencySection {
 /// `sweep.method`: harmonic_balance (continuation of periodic solutions) or stepped_sine (the
 /// reduced transient to steady state at each frequency).
 enum class SweepMethod { harmonic_balance, stepped_sine };
-std::string method_name(SweepMethod method);
+inline constexpr Words<SweepMethod, 2> kSweepMethodWords{
+    {{"harmonic_balance", SweepMethod::harmonic_balance}, {"stepped_sine", SweepMethod::stepped_sine}}};
+inline std::string method_name(SweepMethod method) { return text_of(kSweepMethodWords, method); }
 
 struct SweepSection {
   SweepFrequencySection from, to;
@@ -224,7 +264,9 @@ struct SweepSection {
 /// mesh is graded towards the crack front. Which commands grade is decided in pipeline::build_model.
 /// `mesh.box.grading.mode`: auto (modal and check graded, run uniform), always, none.
 enum class GradingMode { automatic, always, none };
-std::string grading_mode_name(GradingMode mode);
+inline constexpr Words<GradingMode, 3> kGradingModeWords{
+    {{"auto", GradingMode::automatic}, {"always", GradingMode::always}, {"none", GradingMode::none}}};
+inline std::string grading_mode_name(GradingMode mode) { return text_of(kGradingModeWords, mode); }
 
 struct GradingSection {
   GradingMode mode = GradingMode::automatic;
@@ -234,6 +276,8 @@ struct GradingSection {
 /// `accuracy:`: error estimates of the signatures and a tolerance to reach (DETECTION.md sec. 1).
 /// `accuracy.estimate`: auto (where the route is automatic or a tolerance is asked), on, off.
 enum class EstimateChoice { automatic, on, off };
+inline constexpr Words<EstimateChoice, 3> kEstimateChoiceWords{
+    {{"auto", EstimateChoice::automatic}, {"on", EstimateChoice::on}, {"off", EstimateChoice::off}}};
 
 struct AccuracySection {
   EstimateChoice estimate = EstimateChoice::automatic;
@@ -272,6 +316,14 @@ struct Scene {
   std::string where(const std::string& key_path) const;
 };
 
+/// `study.mode` (read by src/study): every combination of the values, or the i-th values together.
+enum class StudyMode { grid, zip };
+inline constexpr Words<StudyMode, 2> kStudyModeWords{{{"grid", StudyMode::grid}, {"zip", StudyMode::zip}}};
+
+/// `identify.sigma` (read by src/identify): scaled (s^2 = chi^2/(n - k), Student's t) is true,
+/// trusted (the stated sigmas, the normal quantile) false.
+inline constexpr Words<bool, 2> kScaledSigmaWords{{{"scaled", true}, {"trusted", false}}};
+
 /// Why the reduced model does not serve `crackle run` of this scene on `ranks` processes under
 /// `transient.model: auto` (empty: it does; the route then takes it, HYBRID.md sec. 1): no harmonic
 /// drive, no spectrum, no breathing crack, mpirun, an explicit time step, initial fields, a release.
@@ -301,8 +353,9 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
 /// Same, from YAML text; `name` stands for the file name in messages.
 Scene parse_scene(const std::string& text, const std::string& name, const std::vector<Override>& overrides = {});
 
-/// The parameter table of a scene file: every key, declared once (schema.hpp). A new section is
-/// one more entry here plus its conversion in scene.cpp.
+/// The parameter table of a scene file: every key, declared once (schema.hpp). A new plain key is
+/// its declaration bound to its struct field (`.to(&Section::field)`) plus the field; a key that
+/// needs a check across keys or a conversion is also read in scene.cpp.
 const Param& scene_parameters();
 /// A table whose one child is the `study:` section (read by the study plan, src/study/plan.cpp,
 /// not by load_scene): declared here so that docs/scene-format.md lists its keys and the plan

@@ -82,6 +82,24 @@ Param& Param::or_scalar_for(std::string child) {
   return *this;
 }
 
+Param& Param::exactly_one_of(std::vector<std::string> keys) {
+  exclusive_keys.push_back(std::move(keys));
+  return *this;
+}
+
+void assign_bound(const Param& param, const Values& values, const std::string& path, std::type_index section_type,
+                  void* section) {
+  for (const Param& c : param.children) {
+    const std::string key = path.empty() ? c.name : path + "." + c.name;
+    if (c.kind == Kind::map) {
+      assign_bound(c, values, key, section_type, section);
+    } else if (c.binding.assign && c.binding.section == section_type && values.has(key)) {
+      const bool auto_word = (c.kind == Kind::number || c.kind == Kind::integer) && values.is_word(key);
+      if (!auto_word) c.binding.assign(values, key, section);  // the word (auto): the struct's default
+    }
+  }
+}
+
 const Param* Param::child(const std::string& child_name) const {
   for (const Param& c : children)
     if (c.name == child_name) return &c;
@@ -324,6 +342,16 @@ class Validator {
     if (param.is_one_of && seen.size() != 1) {
       fail(path, line, describe(param), seen.empty() ? "none" : join({seen.begin(), seen.end()}, " and "));
     }
+    for (const std::vector<std::string>& keys : param.exclusive_keys) {
+      std::vector<std::string> given;
+      for (const std::string& key : keys) {
+        if (seen.count(key)) given.push_back(key);
+      }
+      if (given.size() == 1) continue;
+      std::string got = given.empty() ? "none" : given[0];
+      for (std::size_t i = 1; i < given.size(); ++i) got += (i + 1 == given.size() ? " and " : ", ") + given[i];
+      fail(path, line, "exactly one of " + join(keys), got);
+    }
     visit_children(param, map, path, line, defaulted, unmarked_key_line);
   }
 
@@ -335,7 +363,8 @@ class Validator {
     value.line = line;
     value.count = node.IsNull() ? 0 : static_cast<int>(node.size());
     values_.set(path, value);
-    const Param entry = map_of("", "", param.children);
+    Param entry = map_of("", "", param.children);
+    entry.exclusive_keys = param.exclusive_keys;
     for (int i = 0; i < value.count; ++i) {
       const YAML::Node item = node[i];
       visit(entry, item, entry_path(path, i), defaulted ? line : mark_line(item), defaulted);

@@ -10,8 +10,14 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
+#include <type_traits>
+#include <typeindex>
 #include <vector>
+
+#include "core/types.hpp"
+#include "core/words.hpp"
 
 namespace crackle::scene {
 
@@ -31,6 +37,18 @@ enum class Kind {
 /// Computes a default (YAML text) from the values validated so far; `parent` is the path of the
 /// enclosing map, e.g. `boundary[0]`.
 using DefaultRule = std::function<std::string(const Values& values, const std::string& parent)>;
+
+/// The value at `path` as a field of type T (defined below Values); `choice_value` converts a
+/// choice's word to its enum value.
+template <class T>
+T bound_value(const Values& values, const std::string& path, const std::function<int(const std::string&)>& choice_value);
+
+/// The field of a section struct that a declaration is bound to (Param::to): read_bound() assigns
+/// the validated value to it, so a key is spelled in the table and the struct only.
+struct Binding {
+  std::type_index section = typeid(void);  ///< the struct the field belongs to
+  std::function<void(const Values& values, const std::string& path, void* section)> assign;
+};
 
 /// One declared parameter. Built by the functions below and refined by chained modifiers:
 /// `number("E", "Young's modulus.").with_unit("Pa").above(0).required()`.
@@ -54,6 +72,11 @@ struct Param {
   std::vector<Param> children;         ///< keys of a map, keys of each entry of a list
   std::string word_alternative;        ///< number: a word also accepted instead, e.g. "auto"
   std::string scalar_child;            ///< map: a scalar given for the map stands for this child
+  /// map, list of maps: groups of keys of which each map must give exactly one
+  std::vector<std::vector<std::string>> exclusive_keys;
+  /// choice declared with Words: its word's enum value (as int)
+  std::function<int(const std::string&)> choice_value;
+  Binding binding;  ///< the struct field the value goes to, if bound
 
   Param& required();
   Param& with_unit(std::string unit_text);
@@ -74,6 +97,20 @@ struct Param {
   /// A map that may also be given as a plain value, meaning `{child: value}`
   /// (`frequency: 850` for `frequency: {hz: 850}`).
   Param& or_scalar_for(std::string child);
+  /// A map (or each map of a list) that must give exactly one of `keys` (its children):
+  /// `path: expected exactly one of face, group, point, got none` otherwise.
+  Param& exactly_one_of(std::vector<std::string> keys);
+  /// Binds a scalar (or a list of scalars) to `field` of the section struct S: read_bound(values,
+  /// path, section) assigns it where the document has the value (a number given as its or_word()
+  /// word is left at the struct's default: auto). A choice declared with Words goes to its enum.
+  template <class S, class T>
+  Param& to(T S::*field) {
+    binding.section = typeid(S);
+    binding.assign = [field, convert = choice_value](const Values& values, const std::string& path, void* section) {
+      static_cast<S*>(section)->*field = bound_value<T>(values, path, convert);
+    };
+    return *this;
+  }
 
   bool is_list_of_scalars() const { return max_length > 0; }
   /// The child with this name, or nullptr.
@@ -88,6 +125,13 @@ Param list_of(std::string name, std::string doc, std::vector<Param> entry_keys);
 Param number(std::string name, std::string doc);
 Param integer(std::string name, std::string doc);
 Param choice(std::string name, std::string doc, std::vector<std::string> choices);
+/// A choice whose words stand for an enum's values (core/words.hpp): read with Values::choice.
+template <class E, std::size_t N>
+Param choice(std::string name, std::string doc, const Words<E, N>& words) {
+  Param param = choice(std::move(name), std::move(doc), texts_of(words));
+  param.choice_value = [words](const std::string& text) { return static_cast<int>(parse_word(words, text, "choice")); };
+  return param;
+}
 Param boolean(std::string name, std::string doc);
 /// A free text value: a file name or a mesh group name.
 Param text(std::string name, std::string doc);
@@ -118,6 +162,18 @@ class Values {
   const std::string& word(const std::string& path) const { return entries_.at(path).words.at(0); }
   const std::vector<double>& numbers(const std::string& path) const { return entries_.at(path).numbers; }
   const std::vector<std::string>& words(const std::string& path) const { return entries_.at(path).words; }
+  /// The value of a choice declared with `words` (validated, so every word has one).
+  template <class E, std::size_t N>
+  E choice(const std::string& path, const Words<E, N>& words) const {
+    return parse_word(words, word(path), path);
+  }
+  /// The values of a list of choices declared with `words`.
+  template <class E, std::size_t N>
+  std::vector<E> choices(const std::string& path, const Words<E, N>& list_words) const {
+    std::vector<E> values;
+    for (const std::string& text : words(path)) values.push_back(parse_word(list_words, text, path));
+    return values;
+  }
   /// Entries of a list of maps.
   int count(const std::string& path) const { return entries_.at(path).count; }
 
@@ -134,6 +190,55 @@ class Values {
   std::string file_;
   std::map<std::string, Value> entries_;
 };
+
+template <class T>
+struct IsVector : std::false_type {};
+template <class T>
+struct IsVector<std::vector<T>> : std::true_type {};
+template <class T>
+struct IsOptional : std::false_type {};
+template <class T>
+struct IsOptional<std::optional<T>> : std::true_type {};
+
+template <class T>
+T bound_value(const Values& values, const std::string& path, const std::function<int(const std::string&)>& choice_value) {
+  if constexpr (IsOptional<T>::value) {
+    return bound_value<typename T::value_type>(values, path, choice_value);
+  } else if constexpr (std::is_enum_v<T>) {
+    return static_cast<T>(choice_value(values.word(path)));
+  } else if constexpr (std::is_same_v<T, int>) {  // an integer, or a choice of ints (the axes)
+    return choice_value ? choice_value(values.word(path)) : values.integer(path);
+  } else if constexpr (std::is_same_v<T, double>) {
+    return values.number(path);
+  } else if constexpr (std::is_same_v<T, bool>) {
+    return values.flag(path);
+  } else if constexpr (std::is_same_v<T, std::string>) {
+    return values.word(path);
+  } else if constexpr (std::is_same_v<T, Vec3>) {
+    const std::vector<double>& numbers = values.numbers(path);
+    return Vec3(numbers.at(0), numbers.at(1), numbers.at(2));
+  } else if constexpr (std::is_same_v<T, std::vector<double>>) {
+    return values.numbers(path);
+  } else if constexpr (std::is_same_v<T, std::vector<std::string>>) {
+    return values.words(path);
+  } else {
+    static_assert(IsVector<T>::value, "a field type read_bound can fill");
+    T list;  // a list of choices: enums or ints
+    for (const std::string& word : values.words(path)) list.push_back(static_cast<typename T::value_type>(choice_value(word)));
+    return list;
+  }
+}
+
+/// Assigns every value below `path` (the keys of `param`, a map, and of its nested maps) whose
+/// declaration is bound to a field of `section_type` and that the document has.
+void assign_bound(const Param& param, const Values& values, const std::string& path, std::type_index section_type,
+                  void* section);
+
+/// Fills the fields of `section` bound in the table below `path` (the table's map `param`).
+template <class S>
+void read_bound(const Param& param, const Values& values, const std::string& path, S& section) {
+  assign_bound(param, values, path, typeid(S), &section);
+}
 
 /// Throws InputError `file:line: path: expected ..., got ...`; the line is left out when <= 0
 /// and the path when empty.

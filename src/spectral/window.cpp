@@ -6,23 +6,9 @@
 
 namespace crackle::spectral {
 
-Window parse_window(const std::string& name) {
-  if (name == "auto") return Window::automatic;
-  if (name == "rectangular") return Window::rectangular;
-  if (name == "hann") return Window::hann;
-  if (name == "flattop") return Window::flattop;
-  throw InputError("window: expected auto, rectangular, hann or flattop, got '" + name + "'");
-}
+Window parse_window(const std::string& name) { return parse_word(kWindowWords, name, "window"); }
 
-const char* window_name(Window window) {
-  switch (window) {
-    case Window::automatic: return "auto";
-    case Window::rectangular: return "rectangular";
-    case Window::hann: return "hann";
-    case Window::flattop: return "flattop";
-  }
-  return "?";
-}
+const char* window_name(Window window) { return text_of(kWindowWords, window); }
 
 std::vector<double> window_values(Window window, int n) {
   std::vector<double> w(static_cast<std::size_t>(n > 0 ? n : 0), 1.0);

@@ -3,11 +3,13 @@
 #include <string>
 #include <vector>
 
+#include "core/choices.hpp"
+
 namespace crackle::spectral {
 
-/// Window applied to a record before a DFT. `automatic` lets the analysis choose (see
-/// HarmonicOptions and SpectrumOptions); the others are applied as asked.
-enum class Window { automatic, rectangular, hann, flattop };
+/// Window applied to a record before a DFT (core/choices.hpp, with its words): `automatic` lets the
+/// analysis choose (see HarmonicOptions and SpectrumOptions); the others are applied as asked.
+using crackle::Window;
 
 /// Parses "auto", "rectangular", "hann" or "flattop"; InputError otherwise.
 Window parse_window(const std::string& name);

@@ -390,7 +390,7 @@ StudySpec parse_study_section(const std::string& text, const std::string& file) 
     if (!mode.IsScalar() || std::find(modes.begin(), modes.end(), mode.Scalar()) == modes.end())
       fail(file, mode_line, "study.mode", "one of " + join(modes, ", "),
            describe_node(mode) + (mode.IsScalar() ? suggestion(mode.Scalar(), modes) : ""));
-    spec.mode = mode.Scalar() == "zip" ? StudyMode::zip : StudyMode::grid;
+    spec.mode = *value_of(scene::kStudyModeWords, mode.Scalar());
   }
 
   if (outputs_line >= 0) {

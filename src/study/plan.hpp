@@ -23,7 +23,7 @@
 
 namespace crackle::study {
 
-enum class StudyMode { grid, zip };
+using scene::StudyMode;  // grid | zip (its words: scene::kStudyModeWords)
 
 /// One varied scene key and its values.
 struct VariedKey {

@@ -500,7 +500,7 @@ std::string table_csv(const StudyTable& table) {
 json study_json(const StudyPlan& plan, const StudyTable& table, const std::vector<json>& cases) {
   json document = json::object();
   document["scene"] = plan.file;
-  document["mode"] = plan.spec.mode == StudyMode::zip ? "zip" : "grid";
+  document["mode"] = text_of(scene::kStudyModeWords, plan.spec.mode);
   document["outputs"] = plan.spec.outputs;
   json varied = json::array();
   for (const VariedKey& key : plan.spec.vary) {

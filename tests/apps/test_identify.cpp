@@ -477,6 +477,14 @@ TEST(Identify, BadMeasurementsAreRefusedWithFileLineAndColumn) {
   result = crackle("identify " + (dir / "key.yaml").string() + " -o " + (dir / "out").string());
   EXPECT_EQ(result.exit_code, 2);
   EXPECT_NE(result.output.find("identify.unknowns.crack.plane.ta"), std::string::npos) << result.output;
+  std::ofstream(dir / "measured.csv") << header << "f_bilinear,1,,,205.6,0.1\n";
+  text = read_text(identify_scene(dir, (dir / "measured.csv").string(), 3));
+  text.replace(text.find("  map: {points: 3}"), 18, "  map: {points: 3}\n  sigma: trusting");
+  std::ofstream(dir / "sigma.yaml") << text;
+  result = crackle("identify " + (dir / "sigma.yaml").string() + " -o " + (dir / "out").string());
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.output.find("identify.sigma: expected one of scaled, trusted, got 'trusting'"), std::string::npos)
+      << result.output;
   // An unknown that no measured quantity depends on: the frequencies do not depend on the damping.
   std::ofstream(dir / "measured.csv") << header << "f_bilinear,1,,,205.6,0.1\nf_bilinear,3,,,1280.0,0.5\n";
   text = read_text(identify_scene(dir, (dir / "measured.csv").string(), 3));

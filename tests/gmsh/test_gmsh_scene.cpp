@@ -59,7 +59,7 @@ TEST(GmshScene, MeshFileGroupsAndCrack) {
   EXPECT_EQ(scene.crack_group->gap, 1.0e-6);
   EXPECT_TRUE(scene.has_crack());
   EXPECT_FALSE(scene.crack);
-  EXPECT_EQ(scene.modal.variants, (std::vector<std::string>{"uncracked", "open"}));
+  EXPECT_EQ(scene.modal.variants, (std::vector<mesh::Variant>{mesh::Variant::uncracked, mesh::Variant::open}));
   const pipeline::Model model = pipeline::build_model(scene);
   EXPECT_TRUE(model.mesh.has_crack());
   ASSERT_EQ(model.dirichlet.size(), 1u);

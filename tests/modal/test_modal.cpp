@@ -427,15 +427,24 @@ TEST(ModalOutput, WritesJsonCsvVtuAndTable) {
 }
 
 TEST(ModalInput, NamesParseAndBadNamesAreInputErrors) {
-  EXPECT_EQ(parse_solver("arpack"), Solver::arpack);
+  EXPECT_EQ(parse_word(kSolverWords, "arpack", "backend"), Solver::arpack);
   EXPECT_EQ(parse_factorization("mumps"), Factorization::mumps);
   EXPECT_EQ(parse_mac_weighting("plain"), MacWeighting::plain);
-  EXPECT_EQ(parse_variant("open"), mesh::Variant::open);
+  EXPECT_EQ(parse_word(mesh::kVariantWords, "open", "variant"), mesh::Variant::open);
+  for (const Solver solver : {Solver::slepc, Solver::arpack}) {
+    EXPECT_EQ(parse_word(kSolverWords, solver_name(solver), "backend"), solver);  // the output's word reads back
+  }
   try {
-    parse_solver("lapack");
+    parse_word(kSolverWords, "lapack", "modal backend");
     ADD_FAILURE() << "no exception";
   } catch (const InputError& error) {
-    EXPECT_EQ(std::string(error.what()), "modal.solver: expected one of slepc, arpack, got 'lapack'");
+    EXPECT_EQ(std::string(error.what()), "modal backend: expected one of slepc, arpack, got 'lapack'");
+  }
+  try {
+    parse_factorization("lu");
+    ADD_FAILURE() << "no exception";
+  } catch (const InputError& error) {
+    EXPECT_EQ(std::string(error.what()), "modal.factorization: expected one of automatic, cholmod, mumps, got 'lu'");
   }
 }
 

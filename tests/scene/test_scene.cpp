@@ -80,9 +80,9 @@ TEST(Scene, BeamLoads) {
   EXPECT_EQ(scene.crack->gap, 0.0);
   EXPECT_TRUE(scene.has_modal_section);
   EXPECT_EQ(scene.modal.modes, 10);
-  EXPECT_EQ(scene.modal.variants, (std::vector<std::string>{"uncracked", "open"}));
-  EXPECT_EQ(scene.modal.solver, "slepc");
-  EXPECT_EQ(scene.modal.mass, "consistent");
+  EXPECT_EQ(scene.modal.variants, (std::vector<mesh::Variant>{mesh::Variant::uncracked, mesh::Variant::open}));
+  EXPECT_EQ(scene.modal.solver, ModalSolver::slepc);
+  EXPECT_EQ(scene.modal.mass, MassMatrix::consistent);
 }
 
 TEST(Scene, LoadsAFile) {
@@ -102,7 +102,7 @@ TEST(Scene, DefaultsComeFromTheTable) {
   EXPECT_TRUE(bare.boundary.empty());
   EXPECT_FALSE(bare.crack);
   EXPECT_FALSE(bare.has_modal_section);
-  EXPECT_EQ(bare.modal.variants, (std::vector<std::string>{"uncracked"}));
+  EXPECT_EQ(bare.modal.variants, (std::vector<mesh::Variant>{mesh::Variant::uncracked}));
   // The struct's initial values agree with the table's defaults.
   const ModalSection initial;
   EXPECT_EQ(bare.modal.modes, initial.modes);
@@ -113,7 +113,7 @@ TEST(Scene, DefaultsComeFromTheTable) {
       parse_scene(kBody + crack() + "modal: {modes: 4}\nboundary: [{face: y-, fix: [y, z]}]\n", "beam.yaml");
   EXPECT_EQ(cracked.crack->gap, 0.0);
   EXPECT_EQ(cracked.modal.modes, 4);
-  EXPECT_EQ(cracked.modal.variants, (std::vector<std::string>{"uncracked", "open"}));
+  EXPECT_EQ(cracked.modal.variants, (std::vector<mesh::Variant>{mesh::Variant::uncracked, mesh::Variant::open}));
   EXPECT_EQ(cracked.boundary[0].values, (std::vector<double>{0, 0}));
 }
 
@@ -300,7 +300,7 @@ TEST(Scene, OverridesByKeyPath) {
                                    {"modal.modes", "3"}});
   EXPECT_EQ(scene.crack->region[kZ], (std::array<double, 2>{0.005, 0.01}));
   EXPECT_EQ(scene.boundary[0].values, (std::vector<double>{0.001, 0, 0}));
-  EXPECT_EQ(scene.modal.mass, "lumped");
+  EXPECT_EQ(scene.modal.mass, MassMatrix::lumped);
   EXPECT_EQ(scene.modal.modes, 3);
 
   // An override adds a whole section to a scene without one.

@@ -57,6 +57,49 @@ TEST(SceneEdges, AScalarFrequencyKeepsItsLine) {
   }
 }
 
+// What an excitation, a damping or a probe gives must be what it uses: exactly one place, a
+// frequency only for a harmonic drive and a duration only for a pulse, `at` only with a ratio.
+TEST(SceneEdges, KeysTheTransientWouldIgnoreAreRefused) {
+  const auto with = [](const std::string& old_text, const std::string& new_text) {
+    std::string text = with_probe("mid");
+    text.replace(text.find(old_text), old_text.size(), new_text);
+    return text;
+  };
+  const std::string excitation = "{face: x+, amplitude: 1.0, frequency: 100.0}";
+  EXPECT_EQ(error_of(with(excitation, "{face: x+, amplitude: 1.0, kind: pulse, duration: 1.0e-4, frequency: 100.0}")),
+            "edge.yaml:5: transient.excitation.frequency: expected no frequency with kind: pulse (duration sets its "
+            "band), got a frequency");
+  EXPECT_EQ(error_of(with(excitation, "{face: x+, amplitude: 1.0, frequency: 100.0, duration: 1.0e-4}")),
+            "edge.yaml:5: transient.excitation.duration: expected no duration with kind: harmonic (the run's length "
+            "is transient.periods or transient.duration), got 1e-4");
+  EXPECT_EQ(error_of(with(excitation, "{face: x+, point: [0.2, 0.01, 0.01], amplitude: 1.0, frequency: 100.0}")),
+            "edge.yaml:5: transient.excitation: expected exactly one of face, group, point, got face and point");
+  EXPECT_EQ(error_of(with(excitation, "{face: x+, amplitude: 1.0, frequency: {hz: 100.0, mode: 1}}")),
+            "edge.yaml:5: transient.excitation.frequency: expected exactly one of hz, mode, got hz and mode");
+  EXPECT_EQ(error_of(with("  periods: 2\n", "  periods: 2\n  damping: {alpha: 1.0, at: 100.0}\n")),
+            "edge.yaml:7: transient.damping.at: expected no frequency without a damping ratio (alpha and beta are "
+            "given as they are), got a frequency");
+  EXPECT_EQ(error_of(with("  periods: 2\n", "  periods: 2\n  duration: 0.1\n")),
+            "edge.yaml:4: transient: expected exactly one of periods, duration, got periods and duration");
+  EXPECT_EQ(error_of(with("{name: mid, point: [0.1, 0.01, 0.01]}", "{name: mid}")),
+            "edge.yaml:9: transient.probes[1]: expected exactly one of point, crack_opening, got none");
+  // The values given are the ones read.
+  const Scene scene = parse_scene(with(excitation, "{point: [0.2, 0.01, 0.01], direction: y, amplitude: 2.5, "
+                                                   "frequency: {mode: 2, ratio: 0.5}}"), "edge.yaml");
+  const ExcitationSection& read = *scene.transient->excitation;
+  EXPECT_EQ(*read.point, Vec3(0.2, 0.01, 0.01));
+  EXPECT_TRUE(read.face.empty());
+  EXPECT_EQ(read.direction, 1);
+  EXPECT_EQ(read.amplitude, 2.5);
+  EXPECT_EQ(read.mode, 2);
+  EXPECT_EQ(read.ratio, 0.5);
+  EXPECT_FALSE(read.frequency_hz);
+  EXPECT_EQ(read.of, ModeOf::uncracked);  // no crack
+  EXPECT_EQ(scene.transient->probes[1].name, "mid");
+  EXPECT_EQ(scene.transient->probes[1].point, Vec3(0.1, 0.01, 0.01));
+  EXPECT_FALSE(scene.transient->probes[1].side);
+}
+
 TEST(SceneEdges, FoldersAreNotFiles) {
   const std::string folder = std::filesystem::temp_directory_path().string();
   try {

@@ -65,7 +65,7 @@ TEST(StudyPlan, GridOfARangeAndAList) {
   // The case scene is the base scene with the overrides, and reads back as such.
   const scene::Scene case_scene = scene::parse_scene(plan.cases[7].scene_text, "case.yaml");
   EXPECT_EQ(case_scene.crack->region[2][0], 0.006);
-  EXPECT_EQ(case_scene.modal.mass, "lumped");
+  EXPECT_EQ(case_scene.modal.mass, scene::MassMatrix::lumped);
   EXPECT_EQ(case_scene.material.young, 210e9);
   EXPECT_EQ(
       plan.cases[7].scene_text.rfind("# case 7 (crack.region.z = [0.006, 0.01], modal.mass = lumped)", 0),
@@ -362,7 +362,7 @@ TEST(StudyPlan, ModalCacheKeyIgnoresWhatTheUncrackedModesDoNotDependOn) {
   EXPECT_EQ(depths.cases[0].modal_key == depths.cases[1].modal_key, depths.shares_grid_lines);
   // The primer solves the uncracked modes only.
   const scene::Scene primer = scene::parse_scene(gaps.cases[0].primer_text, "primer.yaml");
-  EXPECT_EQ(primer.modal.variants, std::vector<std::string>{"uncracked"});
+  EXPECT_EQ(primer.modal.variants, std::vector<mesh::Variant>{mesh::Variant::uncracked});
   // A scene with a run and its spectrum on the scene's mesh (transient.model: full) still has a
   // primer (the spectrum needs the transient).
   const std::string run_scene = base_scene() +
@@ -373,7 +373,7 @@ TEST(StudyPlan, ModalCacheKeyIgnoresWhatTheUncrackedModesDoNotDependOn) {
                                     "b.yaml");
   ASSERT_FALSE(runs.cases[0].primer_text.empty());
   EXPECT_EQ(scene::parse_scene(runs.cases[0].primer_text, "primer.yaml").modal.variants,
-            std::vector<std::string>{"uncracked"});
+            std::vector<mesh::Variant>{mesh::Variant::uncracked});
   // Its modes are those of the run's mesh: mesh.box.grading auto meshes a run uniformly, crackle modal
   // graded, so the primer says none. With an accuracy section (which needs the transient) too.
   const StudyPlan accurate = plan_study(run_scene + "accuracy: {estimate: off}\nstudy:\n  vary:\n    crack.gap: [0, 1e-6]\n"
