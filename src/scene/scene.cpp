@@ -61,11 +61,13 @@ Param build_parameters() {
     one_of("mesh", "How the body is meshed: exactly one of the keys below.", {
       map_of("box", "Structured mesh of the box [origin, origin + size].", {
         number("origin", "Corner of the box with the smallest coordinates.").with_unit("m").list(3)
-            .defaults_to("[0, 0, 0]"),
-        number("size", "Edge lengths along x, y, z.").with_unit("m").above(0).list(3).required(),
+            .defaults_to("[0, 0, 0]").to(&mesh::BoxSpec::origin),
+        number("size", "Edge lengths along x, y, z.").with_unit("m").above(0).list(3).required()
+            .to(&mesh::BoxSpec::size),
         integer("cells", "Elements per direction; grid lines are added where crack edges need them.")
-            .at_least(1).list(3).required(),
-        integer("order", "Element order p (Lagrange elements on GLL nodes).").at_least(1).at_most(4).required(),
+            .at_least(1).list(3).required().to(&mesh::BoxSpec::cells),
+        integer("order", "Element order p (Lagrange elements on GLL nodes).").at_least(1).at_most(4).required()
+            .to(&mesh::BoxSpec::order),
         axis_positions("lines", "Extra grid lines along each axis, added to the uniform ones (a study puts the "
                                 "crack edges of all its cases here so that they share one mesh); lines on or "
                                 "outside the boundary and repeated lines are ignored.", 100000),
@@ -133,12 +135,12 @@ Param build_parameters() {
       }).optional_section(),
     }),
     list_of("boundary", "Prescribed displacements on box faces or mesh groups; none: a free body.", {
-      choice("face", "Face of the box (give face or group).", {faces.begin(), faces.end()}),
-      text("group", "Physical group of a Gmsh mesh (any named node set of the mesh)."),
+      choice("face", "Face of the box (give face or group).", {faces.begin(), faces.end()}).to(&BoundarySection::face),
+      text("group", "Physical group of a Gmsh mesh (any named node set of the mesh).").to(&BoundarySection::group),
       choice("fix", "Displacement components fixed on every node of the face.", kAxisWords).list(1, 3).distinct()
-          .required(),
+          .required().to(&BoundarySection::components),
       number("value", "Prescribed displacement of each fixed component.").with_unit("m").list(1, 3)
-          .same_length_as("fix").defaults_to("zeros", zeros_per_fix),
+          .same_length_as("fix").defaults_to("zeros", zeros_per_fix).to(&BoundarySection::values),
     }).defaults_to("[]"),
     map_of("crack", "An axis-aligned rectangular crack on a grid plane of a box mesh (plane and region), or a "
                     "physical surface group of a Gmsh mesh (group); none: no crack.", {
@@ -445,8 +447,6 @@ Param build_parameters() {
   });
   // clang-format on
 }
-
-Vec3 vec3(const std::vector<double>& numbers) { return Vec3(numbers[0], numbers[1], numbers[2]); }
 
 /// Two faces share nodes when they are the same face or meet at a box edge.
 bool faces_touch(const std::string& a, const std::string& b) { return a == b || a[0] != b[0]; }
@@ -835,11 +835,7 @@ void mesh_from(const Values& values, Scene& scene) {
     if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
       values.fail("mesh.gmsh", "a Gmsh mesh file", "a device or pipe, '" + scene.gmsh_file + "'");
   } else {
-    scene.box.origin = vec3(values.numbers("mesh.box.origin"));
-    scene.box.size = vec3(values.numbers("mesh.box.size"));
-    const auto& cells = values.numbers("mesh.box.cells");
-    scene.box.cells = {static_cast<int>(cells[0]), static_cast<int>(cells[1]), static_cast<int>(cells[2])};
-    scene.box.order = values.integer("mesh.box.order");
+    read_section(values, "mesh.box", scene.box);
     for (int axis = 0; axis < 3; ++axis) {
       const std::string key = "mesh.box.lines." + kAxes[axis];
       if (values.has(key)) scene.box.extra_lines[axis] = values.numbers(key);
@@ -867,13 +863,7 @@ std::vector<BoundarySection> boundary_from(const Values& values) {
       values.fail(entry, "face (a box face) or group (a group of the mesh)",
                   values.has(entry + ".face") ? "both" : "neither");
     }
-    if (values.has(entry + ".face")) {
-      section.face = values.word(entry + ".face");
-    } else {
-      section.group = values.word(entry + ".group");
-    }
-    section.components = values.choices(entry + ".fix", kAxisWords);
-    section.values = values.numbers(entry + ".value");
+    read_entry(values, "boundary", i, section);
     section.line = std::max(values.line(entry), 0);
     boundary.push_back(section);
   }

@@ -7,6 +7,7 @@
 /// integer, choice, boolean), the scalars optionally as a list of fixed or bounded length.
 #include <yaml-cpp/yaml.h>
 
+#include <array>
 #include <functional>
 #include <limits>
 #include <map>
@@ -196,6 +197,10 @@ struct IsVector : std::false_type {};
 template <class T>
 struct IsVector<std::vector<T>> : std::true_type {};
 template <class T>
+struct IsArray : std::false_type {};
+template <class T, std::size_t N>
+struct IsArray<std::array<T, N>> : std::true_type {};
+template <class T>
 struct IsOptional : std::false_type {};
 template <class T>
 struct IsOptional<std::optional<T>> : std::true_type {};
@@ -219,6 +224,11 @@ T bound_value(const Values& values, const std::string& path, const std::function
     return Vec3(numbers.at(0), numbers.at(1), numbers.at(2));
   } else if constexpr (std::is_same_v<T, std::vector<double>>) {
     return values.numbers(path);
+  } else if constexpr (IsArray<T>::value) {  // a list of numbers of the array's length (the table's list(n))
+    const std::vector<double>& numbers = values.numbers(path);
+    T array{};
+    for (std::size_t i = 0; i < array.size(); ++i) array[i] = static_cast<typename T::value_type>(numbers.at(i));
+    return array;
   } else if constexpr (std::is_same_v<T, std::vector<std::string>>) {
     return values.words(path);
   } else {
