@@ -31,6 +31,8 @@ struct BrickMatrix {
   std::vector<int> block_start;                  ///< first row of each block; back() = 3n
   std::vector<std::size_t> block_offset;         ///< into `entries`
   std::vector<double> entries;                   ///< blocks, row-major, concatenated
+  /// The layout is FixedLayout<order>'s (orders 1 and 2): the batch runs the fixed-order kernel.
+  bool fixed_layout = false;
   long long multiply_adds() const { return static_cast<long long>(entries.size()); }
 };
 
@@ -139,6 +141,89 @@ BrickMatrix make_brick_matrix(int order, const MatrixX& stiffness, bool try_bloc
             result.butterflies.push_back({result.position[3 * a + c], result.position[3 * mirror + c]});
         }
   return result;
+}
+
+/// The layout make_brick_matrix gives a blocked matrix of order P, as compile-time data: buffer
+/// row of each element DOF, the 8 parity blocks (all non-empty, members in DOF order, entries
+/// row-major and concatenated) and the butterflies (direction 0, 1, 2). The fixed-order kernel
+/// indexes its registers with it; a matrix is run by it only where its own layout is this one.
+template <int P>
+struct FixedLayout {
+  static constexpr int m = P + 1;
+  static constexpr int n = m * m * m;
+  static constexpr int size = 3 * n;
+  static constexpr int n_pairs = 3 * 3 * (m / 2) * m * m;
+  int position[size] = {};
+  int block_start[9] = {};
+  int block_offset[8] = {};
+  int pairs[n_pairs][2] = {};
+};
+
+template <int P>
+constexpr FixedLayout<P> make_fixed_layout() {
+  using L = FixedLayout<P>;
+  FixedLayout<P> layout;
+  int block_of[L::size] = {};
+  for (int k = 0; k < L::m; ++k)
+    for (int j = 0; j < L::m; ++j)
+      for (int i = 0; i < L::m; ++i) {
+        const int a = i + L::m * (j + L::m * k);
+        const int parity[3] = {i > P - i ? 1 : 0, j > P - j ? 1 : 0, k > P - k ? 1 : 0};
+        for (int c = 0; c < 3; ++c) {
+          int block = 0;
+          for (int d = 0; d < 3; ++d) block |= (parity[d] ^ (c == d ? 1 : 0)) << d;
+          block_of[3 * a + c] = block;
+        }
+      }
+  int row = 0, offset = 0;
+  for (int b = 0; b < 8; ++b) {
+    layout.block_start[b] = row;
+    layout.block_offset[b] = offset;
+    int members = 0;
+    for (int r = 0; r < L::size; ++r)
+      if (block_of[r] == b) layout.position[r] = row++, ++members;
+    offset += members * members;
+  }
+  layout.block_start[8] = row;
+  int next = 0;
+  for (int d = 0; d < 3; ++d)
+    for (int k = 0; k < L::m; ++k)
+      for (int j = 0; j < L::m; ++j)
+        for (int i = 0; i < L::m; ++i) {
+          int ijk[3] = {i, j, k};
+          if (ijk[d] >= P - ijk[d]) continue;
+          const int a = i + L::m * (j + L::m * k);
+          ijk[d] = P - ijk[d];
+          const int mirror = ijk[0] + L::m * (ijk[1] + L::m * ijk[2]);
+          for (int c = 0; c < 3; ++c) {
+            layout.pairs[next][0] = layout.position[3 * a + c];
+            layout.pairs[next][1] = layout.position[3 * mirror + c];
+            ++next;
+          }
+        }
+  return layout;
+}
+
+template <int P>
+constexpr FixedLayout<P> kFixedLayout = make_fixed_layout<P>();
+
+/// Whether a brick matrix has FixedLayout<P>'s layout (blocked, the same rows, blocks and butterflies).
+template <int P>
+bool has_fixed_layout(const BrickMatrix& matrix) {
+  const FixedLayout<P>& layout = kFixedLayout<P>;
+  if (static_cast<int>(matrix.position.size()) != layout.size || matrix.block_start.size() != 9 ||
+      matrix.butterflies.size() != static_cast<std::size_t>(layout.n_pairs)) {
+    return false;
+  }
+  for (int r = 0; r < layout.size; ++r)
+    if (matrix.position[r] != layout.position[r]) return false;
+  for (int b = 0; b < 9; ++b)
+    if (matrix.block_start[b] != layout.block_start[b]) return false;
+  for (int b = 0; b < 8; ++b)
+    if (matrix.block_offset[b] != static_cast<std::size_t>(layout.block_offset[b])) return false;
+  for (int k = 0; k < layout.n_pairs; ++k)
+    if (matrix.butterflies[k][0] != layout.pairs[k][0] || matrix.butterflies[k][1] != layout.pairs[k][1]) return false;
+  return true;
 }
 
 /// Everything one run of batches of the brick kernel needs (plain data for the ISA-specific builds).
@@ -325,34 +410,38 @@ CRACKLE_HOT void add_interleaved(Lanes x, Lanes y, Lanes z, double* target) {
 
 /// Gather of a "lattice" batch of order 1: the 8 elements are consecutive along x and so are
 /// their nodes, so each of the 4 node lines (j, k) of the batch is 9 consecutive nodes in x:
-/// vector loads and shuffles instead of 192 scalar moves.
-CRACKLE_HOT void gather_lattice_order1(const double* x, const Index* first_dofs, const int* position, double* in) {
+/// vector loads and shuffles instead of 192 scalar moves. set_row(3 a + c, lanes) stores element
+/// DOF (a, c) of the 8 elements (vectors by reference: no vector arguments across calls).
+template <class SetRow>
+CRACKLE_HOT void gather_lattice_order1(const double* x, const Index* first_dofs, SetRow&& set_row) {
   for (int line = 0; line < 4; ++line) {
     const int a0 = 2 * line;  // local node (0, j, k); (1, j, k) is a0 + 1
     const double* source = x + first_dofs[a0];
-    Lanes c0[3], c1[3];
+    Lanes c0[3];
     deinterleave(source, c0[0], c0[1], c0[2]);
     for (int c = 0; c < 3; ++c) {
       // Nodes 1..8 of the line: shift by one lane, node 8 comes in at the end.
       const Lanes last = {source[24 + c], 0, 0, 0, 0, 0, 0, 0};
-      c1[c] = __builtin_shuffle(c0[c], last, LaneIndices{1, 2, 3, 4, 5, 6, 7, 8});
-      store_lanes(in + static_cast<std::size_t>(position[3 * a0 + c]) * kLanes, c0[c]);
-      store_lanes(in + static_cast<std::size_t>(position[3 * (a0 + 1) + c]) * kLanes, c1[c]);
+      const Lanes shifted = __builtin_shuffle(c0[c], last, LaneIndices{1, 2, 3, 4, 5, 6, 7, 8});
+      set_row(3 * a0 + c, c0[c]);
+      set_row(3 * (a0 + 1) + c, shifted);
     }
   }
 }
 
-/// Scatter-add of a lattice batch of order 1 (see gather_lattice_order1).
-CRACKLE_HOT void scatter_lattice_order1(const double* out, const int* position, double scale, const Index* first_dofs,
-                                        double* y) {
+/// Scatter-add of a lattice batch of order 1 (see gather_lattice_order1); row(3 a + c, lanes)
+/// reads element DOF (a, c) of the 8 elements.
+template <class Row>
+CRACKLE_HOT void scatter_lattice_order1(Row&& row, double scale, const Index* first_dofs, double* y) {
   for (int line = 0; line < 4; ++line) {
     const int a0 = 2 * line;
     double* target = y + first_dofs[a0];
     Lanes sum[3];
     double last[3];
     for (int c = 0; c < 3; ++c) {
-      const Lanes r0 = load_lanes(out + static_cast<std::size_t>(position[3 * a0 + c]) * kLanes);
-      const Lanes r1 = load_lanes(out + static_cast<std::size_t>(position[3 * (a0 + 1) + c]) * kLanes);
+      Lanes r0, r1;
+      row(3 * a0 + c, r0);
+      row(3 * (a0 + 1) + c, r1);
       const Lanes zero = {0, 0, 0, 0, 0, 0, 0, 0};
       // Node m of the line gets r0[m] (its element's node i = 0) and r1[m - 1] (node i = 1 of the previous).
       sum[c] = scale * (r0 + __builtin_shuffle(r1, zero, LaneIndices{8, 0, 1, 2, 3, 4, 5, 6}));
@@ -365,7 +454,92 @@ CRACKLE_HOT void scatter_lattice_order1(const double* out, const int* position, 
   }
 }
 
-#pragma GCC diagnostic pop
+/// One batch of the fixed-order kernel: brick_batches_body's steps on FixedLayout<P>, with every
+/// row index known at compile time (the rows live in registers at P = 1, at fixed stack offsets
+/// at P = 2) and the same operations in the same order: the same results to the bit.
+template <int P>
+CRACKLE_HOT void fixed_batch(const BrickChunkArguments& arguments, Index b) {
+  constexpr const FixedLayout<P>& L = kFixedLayout<P>;
+  constexpr int n = FixedLayout<P>::n;
+  constexpr int size = FixedLayout<P>::size;
+  const BrickMatrix& matrix = arguments.matrices[arguments.batch_matrix[b]];
+  const Index* elements = arguments.batch_elements + static_cast<std::size_t>(b) * kLanes;
+  const Index* first_dofs = arguments.dof_base + static_cast<std::size_t>(elements[0]) * n;
+  const bool lattice = P == 1 && arguments.batch_lattice[b] != 0;
+  Lanes v[size];
+  if (lattice) {
+    gather_lattice_order1(arguments.x, first_dofs,
+                          [&](int r, const Lanes& value) __attribute__((always_inline)) { v[L.position[r]] = value; });
+  } else {
+    double rows[size][kLanes];
+    for (int l = 0; l < kLanes; ++l) {
+      const Index* base = arguments.dof_base + static_cast<std::size_t>(elements[l]) * n;
+#pragma GCC unroll 128
+      for (int a = 0; a < n; ++a) {
+        const double* source = arguments.x + base[a];
+        rows[L.position[3 * a]][l] = source[0];
+        rows[L.position[3 * a + 1]][l] = source[1];
+        rows[L.position[3 * a + 2]][l] = source[2];
+      }
+    }
+#pragma GCC unroll 512
+    for (int r = 0; r < size; ++r) v[r] = load_lanes(rows[r]);
+  }
+  // Displacements relative to local node 0 (see brick_batches_body).
+#pragma GCC unroll 3
+  for (int c = 0; c < 3; ++c) {
+    const Lanes reference = v[L.position[c]];
+#pragma GCC unroll 128
+    for (int a = 0; a < n; ++a) v[L.position[3 * a + c]] -= reference;
+  }
+#pragma GCC unroll 128
+  for (int k = 0; k < FixedLayout<P>::n_pairs; ++k) {
+    const Lanes first = v[L.pairs[k][0]], second = v[L.pairs[k][1]];
+    v[L.pairs[k][0]] = first + second;
+    v[L.pairs[k][1]] = first - second;
+  }
+  Lanes w[size];
+  const double* entries = matrix.entries.data();
+#pragma GCC unroll 8
+  for (int block = 0; block < 8; ++block) {
+    const int start = L.block_start[block];
+    const int s = L.block_start[block + 1] - start;
+    const double* coefficients = entries + L.block_offset[block];
+#pragma GCC unroll 128
+    for (int r = 0; r < s; ++r) {
+      Lanes sum = {0, 0, 0, 0, 0, 0, 0, 0};
+#pragma GCC unroll 128
+      for (int j = 0; j < s; ++j) sum += coefficients[r * s + j] * v[start + j];
+      w[start + r] = sum;
+    }
+  }
+#pragma GCC unroll 128
+  for (int k = 0; k < FixedLayout<P>::n_pairs; ++k) {
+    const Lanes first = w[L.pairs[k][0]], second = w[L.pairs[k][1]];
+    w[L.pairs[k][0]] = first + second;
+    w[L.pairs[k][1]] = first - second;
+  }
+  const double scale = arguments.scale;
+  if (lattice) {
+    scatter_lattice_order1([&](int r, Lanes& value) __attribute__((always_inline)) { value = w[L.position[r]]; }, scale, first_dofs,
+                           arguments.y);
+    return;
+  }
+  double rows[size][kLanes];
+#pragma GCC unroll 512
+  for (int r = 0; r < size; ++r) store_lanes(rows[r], w[r]);
+  const int count = arguments.batch_count[b];
+  for (int l = 0; l < count; ++l) {
+    const Index* base = arguments.dof_base + static_cast<std::size_t>(elements[l]) * n;
+#pragma GCC unroll 128
+    for (int a = 0; a < n; ++a) {
+      double* target = arguments.y + base[a];
+      target[0] += scale * rows[L.position[3 * a]][l];
+      target[1] += scale * rows[L.position[3 * a + 1]][l];
+      target[2] += scale * rows[L.position[3 * a + 2]][l];
+    }
+  }
+}
 
 CRACKLE_HOT void brick_batches_body(const BrickChunkArguments& arguments) {
   const int n = arguments.n;
@@ -373,6 +547,14 @@ CRACKLE_HOT void brick_batches_body(const BrickChunkArguments& arguments) {
   double* out = arguments.out;
   for (Index b = arguments.batch_begin; b < arguments.batch_end; ++b) {
     const BrickMatrix& matrix = arguments.matrices[arguments.batch_matrix[b]];
+    if (matrix.fixed_layout) {
+      if (arguments.n == FixedLayout<1>::n) {
+        fixed_batch<1>(arguments, b);
+      } else {
+        fixed_batch<2>(arguments, b);
+      }
+      continue;
+    }
     const int count = arguments.batch_count[b];
     const Index* elements = arguments.batch_elements + static_cast<std::size_t>(b) * kLanes;
     const int* position = matrix.position.data();
@@ -382,7 +564,9 @@ CRACKLE_HOT void brick_batches_body(const BrickChunkArguments& arguments) {
     // lanes repeat the first element). Scalar loads (hardware gathers are slower here), or vector
     // loads and shuffles for lattice batches.
     if (lattice) {
-      gather_lattice_order1(arguments.x, first_dofs, position, in);
+      gather_lattice_order1(arguments.x, first_dofs, [&](int r, const Lanes& value) __attribute__((always_inline)) {
+        store_lanes(in + static_cast<std::size_t>(position[r]) * kLanes, value);
+      });
     } else {
     for (int l = 0; l < kLanes; ++l) {
       const Index* base = arguments.dof_base + static_cast<std::size_t>(elements[l]) * n;
@@ -419,7 +603,11 @@ CRACKLE_HOT void brick_batches_body(const BrickChunkArguments& arguments) {
     const double scale = arguments.scale;
     // Scatter, one element after the other: elements of a batch may share nodes.
     if (lattice) {
-      scatter_lattice_order1(out, position, scale, first_dofs, arguments.y);
+      scatter_lattice_order1(
+          [&](int r, Lanes& value) __attribute__((always_inline)) {
+            value = load_lanes(out + static_cast<std::size_t>(position[r]) * kLanes);
+          },
+          scale, first_dofs, arguments.y);
       continue;
     }
     for (int l = 0; l < count; ++l) {
@@ -433,6 +621,8 @@ CRACKLE_HOT void brick_batches_body(const BrickChunkArguments& arguments) {
     }
   }
 }
+
+#pragma GCC diagnostic pop
 
 __attribute__((target("avx512f,avx512vl,avx512dq,avx2,fma,bmi,bmi2,popcnt")))
 void brick_batches_avx512(const BrickChunkArguments& arguments) { brick_batches_body(arguments); }
@@ -767,6 +957,9 @@ ElasticOperator::ElasticOperator(const mesh::Mesh& mesh, const mesh::DofMap& dof
         fem::brick_coordinates(basis, shape[0], shape[1], shape[2], coords.data());
         fem::element_stiffness(basis, coords.data(), materials[static_cast<int>(shape[3])], stiffness);
         impl.matrices.push_back(make_brick_matrix(mesh.order, stiffness, true));
+        BrickMatrix& matrix = impl.matrices.back();
+        matrix.fixed_layout = options.fixed_order_kernel &&
+                              ((mesh.order == 1 && has_fixed_layout<1>(matrix)) || (mesh.order == 2 && has_fixed_layout<2>(matrix)));
       }
       // Batches: within a chunk, elements of one brick in order, kLanes at a time.
       impl.chunk_batch_begin.push_back(0);
@@ -802,6 +995,7 @@ ElasticOperator::ElasticOperator(const mesh::Mesh& mesh, const mesh::DofMap& dof
       impl.info.n_element_matrices = static_cast<int>(impl.matrices.size());
       impl.info.n_batches = static_cast<Index>(impl.batch_count.size());
       for (char lattice : impl.batch_lattice) impl.info.n_lattice_batches += lattice;
+      for (int matrix : impl.batch_matrix) impl.info.n_fixed_order_batches += impl.matrices[matrix].fixed_layout ? 1 : 0;
       impl.info.element_multiply_adds = impl.matrices.front().multiply_adds();
     }
   }
@@ -938,7 +1132,7 @@ void ElasticOperator::apply_chunks(double scale, const VectorX& x, VectorX& y, I
       // A colour's chunks are in increasing order: those of the range are one run of them.
       const std::size_t from = all ? 0 : std::lower_bound(chunks.begin(), chunks.end(), first_chunk) - chunks.begin();
       const std::size_t to = all ? chunks.size() : std::lower_bound(chunks.begin(), chunks.end(), end_chunk) - chunks.begin();
-#pragma omp for schedule(dynamic, 1)
+#pragma omp for schedule(static)
       for (std::size_t k = from; k < to; ++k) run_chunk(chunks[k], scratch.data());
     }
   }

@@ -12,8 +12,10 @@
 ///   Otherwise the whole K_e is kept. Elements are processed in SIMD batches of 8 of the same
 ///   brick: gather, butterfly, small dense products, butterfly, scatter. At order 1, a batch of 8
 ///   elements consecutive along x whose nodes are consecutive too (the box generator's numbering)
-///   is gathered and scattered with vector loads and shuffles. The hot loop is built for AVX-512,
-///   AVX2+FMA and the baseline, picked at run time.
+///   is gathered and scattered with vector loads and shuffles. At orders 1 and 2, a blocked matrix
+///   runs in a kernel compiled for that order's layout (rows at compile-time indices: in registers
+///   at order 1), with the same operations in the same order as the general brick kernel. The hot
+///   loop is built for AVX-512, AVX2+FMA and the baseline, picked at run time.
 /// - **general**: any hexahedra: sum factorisation on the (p+1)^3 Gauss points (the quadrature of
 ///   fem::element_stiffness), with the inverse Jacobian and w det J of every Gauss point stored
 ///   (10 doubles per point); checks that every Jacobian is positive.
@@ -22,7 +24,9 @@
 ///
 /// Threads (OpenMP, omp_get_max_threads() at the call): the elements are cut into chunks of
 /// consecutive elements, and the chunks coloured so that no two chunks of a colour share a DOF
-/// node; one colour at a time, threads take whole chunks. With one thread the chunks run in
+/// node; one colour at a time, threads take whole chunks, split statically: a thread gets the same
+/// chunks at every application, so it keeps working on the same part of the vectors (the
+/// integrator's static split of the update works on much the same DOFs). With one thread the chunks run in
 /// element order; below 20000 DOFs an application always runs on one thread. Results are
 /// independent of the thread count up to summation order. Chunks can be made to begin at given
 /// elements (ElasticOperatorOptions::element_cuts), and a range of whole chunks applied alone
@@ -42,6 +46,9 @@ namespace crackle::fem {
 struct ElasticOperatorOptions {
   /// Use the brick kernel when the mesh allows it (false forces the general kernel, for tests).
   bool brick_kernel = true;
+  /// At orders 1 and 2, run blocked bricks with the kernel compiled for that order's layout (false
+  /// forces the kernel that reads the layout at run time, for tests and benchmarks).
+  bool fixed_order_kernel = true;
   /// Elements per chunk (the unit of work of a thread); 0 = automatic.
   Index chunk_elements = 0;
   /// Elements at which a chunk must begin (ascending), so that the element ranges between them can
@@ -60,6 +67,7 @@ struct ElasticOperatorInfo {
   int n_colours = 0;           ///< colour classes of chunks
   Index n_batches = 0;          ///< SIMD batches of the brick kernel
   Index n_lattice_batches = 0;  ///< of which gathered and scattered with vector moves (order 1)
+  Index n_fixed_order_batches = 0;  ///< of which run by the kernel compiled for the order's layout (orders 1, 2)
   /// Multiply-adds per element application in the brick kernel (block entries, or (3n)^2 dense).
   long long element_multiply_adds = 0;
 };

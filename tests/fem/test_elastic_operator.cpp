@@ -88,6 +88,47 @@ TEST(ElasticOperator, LatticeBatchesOfOrderOneEqualAssembledStiffness) {
   EXPECT_LE((y - expected).norm(), 1e-12 * expected.norm());
 }
 
+TEST(ElasticOperator, FixedOrderKernelGivesTheGeneralBrickKernelsResultsToTheBit) {
+  // Orders 1 and 2: a graded mesh with a crack (several bricks, lattice and scalar batches, partial
+  // batches) applied by the kernel compiled for the order's layout and by the one that reads the
+  // layout at run time: the same operations in the same order, so the same bits.
+  const fem::Materials materials = {fem::isotropic(2e11, 0.3, 7800.0)};
+  for (int order : {1, 2}) {
+    mesh::BoxSpec box;
+    box.size = Vec3(1.9, 0.2, 0.3);
+    box.cells = {19, 2, 3};
+    box.order = order;
+    box.extra_lines[0] = {0.05, 0.15, 1.25};  // three brick sizes along x
+    mesh::CrackSpec crack;
+    crack.normal = kZ;
+    crack.at = 0.1;
+    crack.region = {{{0.5, 1.2}, {0.0, 0.2}, {0.0, 0.0}}};
+    const mesh::Mesh mesh = mesh::build_box_mesh(box, crack);
+    const mesh::DofMap dofs = mesh::make_dof_map(mesh, mesh::Variant::open);
+    ElasticOperatorOptions fixed_options, general_options;
+    general_options.fixed_order_kernel = false;
+    const ElasticOperator fixed(mesh, dofs, materials, fixed_options);
+    const ElasticOperator general(mesh, dofs, materials, general_options);
+    EXPECT_GT(fixed.info().n_element_matrices, 1);
+    EXPECT_EQ(fixed.info().n_fixed_order_batches, fixed.info().n_batches) << "order " << order;
+    EXPECT_EQ(general.info().n_fixed_order_batches, 0);
+    if (order == 1) {
+      EXPECT_GT(fixed.info().n_lattice_batches, 0);
+      EXPECT_LT(fixed.info().n_lattice_batches, fixed.info().n_batches);
+    }
+    omp_set_num_threads(1);
+    const VectorX x = VectorX::Random(dofs.n_dofs());
+    VectorX y_fixed = VectorX::Random(dofs.n_dofs()), y_general = y_fixed;
+    fixed.apply_add(-0.7, x, y_fixed);
+    general.apply_add(-0.7, x, y_general);
+    EXPECT_EQ((y_fixed - y_general).cwiseAbs().maxCoeff(), 0.0) << "order " << order;
+    const VectorX expected = fem::assemble_stiffness(mesh, dofs, materials) * x;
+    VectorX y;
+    fixed.apply(x, y);
+    EXPECT_LE((y - expected).norm(), 1e-12 * expected.norm()) << "order " << order;
+  }
+}
+
 TEST(ElasticOperator, ElementRangesBetweenCutsSumToTheWholeProduct) {
   // Chunks of 8 cut at elements 5 and 13 (a distributed run's boundary and interior halves): the
   // three ranges applied in turn give the whole product, on one thread to the last bit.
