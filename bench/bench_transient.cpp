@@ -3,10 +3,14 @@
 /// for 1 and 2 threads, with and without a crack in contact, and the share of the time spent in
 /// the contact forces. Usage:
 ///   bench_transient [--orders 1,2,3,4] [--elements 1e4,1e5,1e6] [--threads 1,2] [--seconds 2]
-///                   [--max-dofs 3e7] [--crack]
-/// One line per case on stdout (a table), progress on stderr.
+///                   [--max-dofs 3e7] [--crack] [--roofline]
+/// One line per case on stdout (a table), progress on stderr. --roofline adds, per case, the
+/// update of central differences timed alone (a system with no force: u, v, f, 1/m read, u, v, f
+/// written, 56 B per DOF) on vectors of the case's size, the bandwidth that gives, and the step's
+/// least time at that bandwidth for its minimal traffic (kMinimalBytes per DOF-step).
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -19,14 +23,53 @@
 #include "core/resources.hpp"
 #include "fem/material.hpp"
 #include "mesh/box.hpp"
+#include "transient/integrator.hpp"
 #include "transient/solver.hpp"
+
+namespace {
+
+/// The least bytes a step moves per DOF: the element kernel reads u and reads and writes f (24 B)
+/// plus its indices (5-9 B at p = 1-2), the update reads u, v, f, 1/m and writes u, v, f (56 B).
+constexpr double kMinimalBytes = 85.0;
+
+/// A system with no force: CentralDifference::step is then the update loop alone.
+class FreeSystem final : public crackle::transient::SecondOrderSystem {
+ public:
+  explicit FreeSystem(crackle::Index n) : mass_(crackle::VectorX::Constant(n, 2.0)), inverse_(crackle::VectorX::Constant(n, 0.5)) {}
+  crackle::Index n_dofs() const override { return mass_.size(); }
+  const crackle::VectorX& mass() const override { return mass_; }
+  const crackle::VectorX& inverse_mass() const override { return inverse_; }
+  double mass_damping() const override { return 0.0; }
+  void add_force(const crackle::transient::ForceInput&, crackle::VectorX&) override {}
+
+ private:
+  crackle::VectorX mass_, inverse_;
+};
+
+/// Seconds per DOF of the update alone on n DOFs (median of 5 timings of about 0.2 s each).
+double update_seconds_per_dof(crackle::Index n) {
+  FreeSystem system(n);
+  crackle::transient::CentralDifference integrator(n);
+  crackle::VectorX u = crackle::VectorX::Random(n), v = crackle::VectorX::Random(n);
+  const int repetitions = std::max(5, static_cast<int>(2e7 / static_cast<double>(n)));
+  std::vector<double> timings;
+  for (int k = 0; k < 5; ++k) {
+    const crackle::Stopwatch watch;
+    for (int r = 0; r < repetitions; ++r) integrator.step(system, 0.0, 1e-9, 1e-9, u, v);
+    timings.push_back(watch.seconds() / repetitions / static_cast<double>(n));
+  }
+  std::sort(timings.begin(), timings.end());
+  return timings[2];
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace crackle;
   using bench::parse_list;
   std::vector<double> orders = {1, 2, 3, 4}, elements = {1e4, 1e5, 1e6}, threads = {1, 2};
   double seconds = 2.0, max_dofs = 3e7;
-  bool crack = false;
+  bool crack = false, roofline = false;
   for (int k = 1; k < argc; ++k) {
     const std::string flag = argv[k];
     const std::string value = k + 1 < argc ? argv[k + 1] : "";
@@ -36,9 +79,10 @@ int main(int argc, char** argv) {
     else if (flag == "--seconds") seconds = std::stod(value), ++k;
     else if (flag == "--max-dofs") max_dofs = std::stod(value), ++k;
     else if (flag == "--crack") crack = true;
+    else if (flag == "--roofline") roofline = true;
     else {
       std::fprintf(stderr, "usage: %s [--orders 1,2] [--elements 1e4,1e5] [--threads 1,2] [--seconds s] "
-                           "[--max-dofs n] [--crack]\n", argv[0]);
+                           "[--max-dofs n] [--crack] [--roofline]\n", argv[0]);
       return 2;
     }
   }
@@ -111,6 +155,14 @@ int main(int argc, char** argv) {
                     summary.kernel.c_str(), static_cast<long long>(summary.steps), summary.ns_per_dof_step,
                     summary.setup_s + mesh_seconds, 100.0 * contact_seconds / summary.wall_s,
                     static_cast<long long>(contact_term ? contact_term->contact().n_pairs() : 0));
+        if (roofline) {
+          const double update = update_seconds_per_dof(summary.n_dofs);
+          const double bandwidth = 56.0 / update;
+          std::printf("    update alone %.3f ns/dof (%.1f GB/s at 56 B/dof); roofline of the step %.2f ns/dof-step "
+                      "(%.0f B/dof-step), the step at %.1fx it\n",
+                      1e9 * update, 1e-9 * bandwidth, 1e9 * kMinimalBytes / bandwidth, kMinimalBytes,
+                      summary.ns_per_dof_step / (1e9 * kMinimalBytes / bandwidth));
+        }
         std::fflush(stdout);
       }
     }

@@ -110,6 +110,10 @@ if want transient; then
   "$BUILD"/bench/bench_transient --orders 1,2,3,4 --elements 1e4,1e5,1e6 --threads 1,2 --seconds 1.5 \
       --max-dofs 3.5e6 --crack 2>/dev/null | awk 'NR>1{printf "|"; for(i=1;i<=NF;i++) printf " %s |", $i; print ""}'
   echo
+  echo "Roofline of the step (bench_transient --roofline: the update alone on vectors of the case's size):"
+  "$BUILD"/bench/bench_transient --orders 1,2 --elements 1e5,1e6 --threads 1,2 --seconds 1.5 --max-dofs 3.5e6 \
+      --crack --roofline 2>/dev/null | awk '/update alone/{sub(/^ +/, ""); print "- p = " p ", " d " DOFs, " t " thread(s): " $0; next} NR>1{p=$1; d=$3; t=$4}'
+  echo
   echo "### Transient stability map: data/beam.yaml, cells [10,1,2], p = 1"
   load
   python3 bench/stability_map.py "$crackle" "$out/stability"
