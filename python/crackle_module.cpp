@@ -527,6 +527,7 @@ PYBIND11_MODULE(_crackle, module) {
         options.output_directory = output;
         options.modes = modes;
         options.solver = solver;
+        options.solver_option = "solver";
         options.modal_cache = modal_cache;
         ModalArrays arrays;
         call_library(sink, [&](std::ostream& out) {

@@ -32,6 +32,7 @@ struct ModalCommandOptions {
   std::filesystem::path output_directory = "out";
   int modes = 0;       ///< overrides modal.modes when > 0
   std::string solver;  ///< overrides modal.solver when not empty
+  std::string solver_option = "--solver";  ///< how the caller spells that override in messages (Python: "solver")
   std::filesystem::path modal_cache;  ///< folder sharing the modal solves and reduced models between runs
   bool overwrite = false;  ///< write into a folder that holds files of others (they are kept)
 };

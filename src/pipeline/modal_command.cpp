@@ -72,7 +72,7 @@ void run_modal_command(const ModalCommandOptions& options, std::ostream& out, co
   const scene::Scene scene = scene::load_scene(options.scene_path, overrides);
   scene::ModalSection section = scene.modal;
   if (options.modes > 0) section.modes = options.modes;
-  if (!options.solver.empty()) section.solver = parse_word(scene::kModalSolverWords, options.solver, "--solver");
+  if (!options.solver.empty()) section.solver = parse_word(scene::kModalSolverWords, options.solver, options.solver_option);
   const bool writer = modal::is_output_rank();
   // Fail on an unwritable or foreign output directory, or a mesh too big for the memory, before the solve.
   check_memory(scene, matrices::eigen_solve, MeshUse::modal);

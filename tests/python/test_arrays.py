@@ -70,6 +70,13 @@ def test_run_and_sweep_arrays():
     assert curve.nbytes() > 0
 
 
+def test_a_bad_solver_is_named_as_python_spells_it():
+    """modal(solver=...) takes the words of modal.solver; another is refused before any solve, with
+    the message naming the argument `solver` (the command line's `--solver`) and the words."""
+    with pytest.raises(crackle.SceneError, match=r"^solver: expected one of auto, slepc, arpack, got 'lapack'"):
+        crackle.modal(small_beam(), solver="lapack")
+
+
 def test_a_run_starts_its_tolerance_where_an_earlier_result_ended():
     """accuracy_start takes an earlier RunResult (its run.json): one whose estimate reached no setting
     is refused before the run starts, naming the file and the key."""
