@@ -20,7 +20,7 @@ import time
 REUSE = "--reuse" in sys.argv
 
 BASE = [
-    "--set", "mesh.box.cells=[20,1,2]", "--set", "mesh.box.order=1",
+    "--set", "transient.model=full", "--set", "mesh.box.cells=[20,1,2]", "--set", "mesh.box.order=1",
     "--set", "transient.excitation.frequency=100", "--set", "transient.excitation.ramp_periods=0.5",
     "--set", "transient.excitation.amplitude=200",
     "--set", "transient.periods=2", "--set", "transient.progress=false",
