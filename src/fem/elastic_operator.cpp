@@ -36,6 +36,34 @@ struct BrickMatrix {
   long long multiply_adds() const { return static_cast<long long>(entries.size()); }
 };
 
+/// The parity block of element DOF (node (i, j, k), component c) of a brick of the given order
+/// under the butterfly transform: per direction d, the node's 1D index is odd (a mirror
+/// difference, i > order - i) or even, and a reflection along d also flips component d, so the
+/// DOF's character is parity XOR (c == d); the block is those three bits.
+constexpr int parity_block(int order, int i, int j, int k, int c) {
+  const int parity[3] = {i > order - i ? 1 : 0, j > order - j ? 1 : 0, k > order - k ? 1 : 0};
+  int block = 0;
+  for (int d = 0; d < 3; ++d) block |= (parity[d] ^ (c == d ? 1 : 0)) << d;
+  return block;
+}
+
+/// The butterflies' node pairs (a, mirror of a) of a brick of the given order, one direction
+/// after the other (they commute), nodes in k, j, i order: visit(a, mirror) for each.
+template <class Visit>
+constexpr void for_each_mirror_pair(int order, Visit&& visit) {
+  const int m = order + 1;
+  for (int d = 0; d < 3; ++d)
+    for (int k = 0; k < m; ++k)
+      for (int j = 0; j < m; ++j)
+        for (int i = 0; i < m; ++i) {
+          int ijk[3] = {i, j, k};
+          if (ijk[d] >= order - ijk[d]) continue;
+          const int a = i + m * (j + m * k);
+          ijk[d] = order - ijk[d];
+          visit(a, ijk[0] + m * (ijk[1] + m * ijk[2]));
+        }
+}
+
 /// Builds the brick matrix from K_e (3n x 3n, DOFs interleaved). With reflection symmetry the
 /// butterfly H (per direction: mirror sums at i < p/2, differences at i > p/2, middle node kept)
 /// block-diagonalises it: K = H Lambda^{-1} H^T K H Lambda^{-1} H^T with Lambda = H^T H, so the stored
@@ -58,9 +86,8 @@ BrickMatrix make_brick_matrix(int order, const MatrixX& stiffness, bool try_bloc
   };
   if (!try_blocks) return dense();
 
-  // 1D butterfly and parities.
+  // 1D butterfly.
   MatrixX h1 = MatrixX::Zero(m, m);
-  std::vector<int> odd(m, 0);
   for (int i = 0; i < m; ++i) {
     const int mirror = order - i;
     if (i < mirror) {
@@ -68,7 +95,6 @@ BrickMatrix make_brick_matrix(int order, const MatrixX& stiffness, bool try_bloc
       h1(mirror, i) = 1.0;
       h1(i, mirror) = 1.0;  // column mirror: e_i - e_mirror (difference, odd)
       h1(mirror, mirror) = -1.0;
-      odd[mirror] = 1;
     } else if (i == mirror) {
       h1(i, i) = 1.0;
     }
@@ -87,14 +113,7 @@ BrickMatrix make_brick_matrix(int order, const MatrixX& stiffness, bool try_bloc
               const int b = ii + m * (jj + m * kk);
               for (int c = 0; c < 3; ++c) h(3 * a + c, 3 * b + c) = value;
             }
-        // Column a of H in component c is even/odd per direction; a reflection along d also flips
-        // component d: the character of that DOF is parity XOR (c == d).
-        for (int c = 0; c < 3; ++c) {
-          const int parity[3] = {odd[i], odd[j], odd[k]};
-          int block = 0;
-          for (int d = 0; d < 3; ++d) block |= (parity[d] ^ (c == d ? 1 : 0)) << d;
-          block_of[3 * a + c] = block;
-        }
+        for (int c = 0; c < 3; ++c) block_of[3 * a + c] = parity_block(order, i, j, k, c);
       }
   const VectorX lambda_inverse = (h.transpose() * h).diagonal().cwiseInverse();
   const MatrixX transformed =
@@ -127,25 +146,18 @@ BrickMatrix make_brick_matrix(int order, const MatrixX& stiffness, bool try_bloc
       }
   }
   result.block_start.push_back(size);
-  // Butterflies, one direction after the other (they commute), per component.
-  for (int d = 0; d < 3; ++d)
-    for (int k = 0; k < m; ++k)
-      for (int j = 0; j < m; ++j)
-        for (int i = 0; i < m; ++i) {
-          int ijk[3] = {i, j, k};
-          if (ijk[d] >= order - ijk[d]) continue;
-          const int a = i + m * (j + m * k);
-          ijk[d] = order - ijk[d];
-          const int mirror = ijk[0] + m * (ijk[1] + m * ijk[2]);
-          for (int c = 0; c < 3; ++c)
-            result.butterflies.push_back({result.position[3 * a + c], result.position[3 * mirror + c]});
-        }
+  // Butterflies, per component.
+  for_each_mirror_pair(order, [&](int a, int mirror) {
+    for (int c = 0; c < 3; ++c)
+      result.butterflies.push_back({result.position[3 * a + c], result.position[3 * mirror + c]});
+  });
   return result;
 }
 
 /// The layout make_brick_matrix gives a blocked matrix of order P, as compile-time data: buffer
 /// row of each element DOF, the 8 parity blocks (all non-empty, members in DOF order, entries
-/// row-major and concatenated) and the butterflies (direction 0, 1, 2). The fixed-order kernel
+/// row-major and concatenated) and the butterflies (direction 0, 1, 2), from the same
+/// parity_block and for_each_mirror_pair as make_brick_matrix. The fixed-order kernel
 /// indexes its registers with it; a matrix is run by it only where its own layout is this one.
 template <int P>
 struct FixedLayout {
@@ -166,15 +178,8 @@ constexpr FixedLayout<P> make_fixed_layout() {
   int block_of[L::size] = {};
   for (int k = 0; k < L::m; ++k)
     for (int j = 0; j < L::m; ++j)
-      for (int i = 0; i < L::m; ++i) {
-        const int a = i + L::m * (j + L::m * k);
-        const int parity[3] = {i > P - i ? 1 : 0, j > P - j ? 1 : 0, k > P - k ? 1 : 0};
-        for (int c = 0; c < 3; ++c) {
-          int block = 0;
-          for (int d = 0; d < 3; ++d) block |= (parity[d] ^ (c == d ? 1 : 0)) << d;
-          block_of[3 * a + c] = block;
-        }
-      }
+      for (int i = 0; i < L::m; ++i)
+        for (int c = 0; c < 3; ++c) block_of[3 * (i + L::m * (j + L::m * k)) + c] = parity_block(P, i, j, k, c);
   int row = 0, offset = 0;
   for (int b = 0; b < 8; ++b) {
     layout.block_start[b] = row;
@@ -186,21 +191,13 @@ constexpr FixedLayout<P> make_fixed_layout() {
   }
   layout.block_start[8] = row;
   int next = 0;
-  for (int d = 0; d < 3; ++d)
-    for (int k = 0; k < L::m; ++k)
-      for (int j = 0; j < L::m; ++j)
-        for (int i = 0; i < L::m; ++i) {
-          int ijk[3] = {i, j, k};
-          if (ijk[d] >= P - ijk[d]) continue;
-          const int a = i + L::m * (j + L::m * k);
-          ijk[d] = P - ijk[d];
-          const int mirror = ijk[0] + L::m * (ijk[1] + L::m * ijk[2]);
-          for (int c = 0; c < 3; ++c) {
-            layout.pairs[next][0] = layout.position[3 * a + c];
-            layout.pairs[next][1] = layout.position[3 * mirror + c];
-            ++next;
-          }
-        }
+  for_each_mirror_pair(P, [&](int a, int mirror) {
+    for (int c = 0; c < 3; ++c) {
+      layout.pairs[next][0] = layout.position[3 * a + c];
+      layout.pairs[next][1] = layout.position[3 * mirror + c];
+      ++next;
+    }
+  });
   return layout;
 }
 
@@ -454,6 +451,51 @@ CRACKLE_HOT void scatter_lattice_order1(Row&& row, double scale, const Index* fi
   }
 }
 
+/// visit(a) for the n nodes of an element: fully unrolled where the count N is known at compile
+/// time (N > 0), a plain loop over the run-time n otherwise.
+template <int N, class Visit>
+CRACKLE_HOT void for_each_node(int n, Visit&& visit) {
+  if constexpr (N > 0) {
+#pragma GCC unroll 128
+    for (int a = 0; a < N; ++a) visit(a);
+  } else {
+    for (int a = 0; a < n; ++a) visit(a);
+  }
+}
+
+/// Scalar gather of a batch: buffer row position(3 a + c), lane l holds x at DOF c of node a of
+/// element l (padding lanes repeat the first element). Scalar loads: hardware gathers are slower.
+template <int N, class Position>
+CRACKLE_HOT void gather_scalar(const BrickChunkArguments& arguments, const Index* elements, int n, Position&& position,
+                               double* buffer) {
+  for (int l = 0; l < kLanes; ++l) {
+    const Index* base = arguments.dof_base + static_cast<std::size_t>(elements[l]) * n;
+    for_each_node<N>(n, [&](int a) __attribute__((always_inline)) {
+      const double* source = arguments.x + base[a];
+      buffer[static_cast<std::size_t>(position(3 * a)) * kLanes + l] = source[0];
+      buffer[static_cast<std::size_t>(position(3 * a + 1)) * kLanes + l] = source[1];
+      buffer[static_cast<std::size_t>(position(3 * a + 2)) * kLanes + l] = source[2];
+    });
+  }
+}
+
+/// Scalar scatter-add of a batch's `count` elements, one after the other (elements of a batch
+/// may share nodes): y at DOF c of node a of element l += scale * buffer row position(3 a + c), lane l.
+template <int N, class Position>
+CRACKLE_HOT void scatter_scalar(const BrickChunkArguments& arguments, const Index* elements, int n, int count,
+                                Position&& position, const double* buffer) {
+  const double scale = arguments.scale;
+  for (int l = 0; l < count; ++l) {
+    const Index* base = arguments.dof_base + static_cast<std::size_t>(elements[l]) * n;
+    for_each_node<N>(n, [&](int a) __attribute__((always_inline)) {
+      double* target = arguments.y + base[a];
+      target[0] += scale * buffer[static_cast<std::size_t>(position(3 * a)) * kLanes + l];
+      target[1] += scale * buffer[static_cast<std::size_t>(position(3 * a + 1)) * kLanes + l];
+      target[2] += scale * buffer[static_cast<std::size_t>(position(3 * a + 2)) * kLanes + l];
+    });
+  }
+}
+
 /// One batch of the fixed-order kernel: brick_batches_body's steps on FixedLayout<P>, with every
 /// row index known at compile time (the rows live in registers at P = 1, at fixed stack offsets
 /// at P = 2) and the same operations in the same order: the same results to the bit.
@@ -472,16 +514,8 @@ CRACKLE_HOT void fixed_batch(const BrickChunkArguments& arguments, Index b) {
                           [&](int r, const Lanes& value) __attribute__((always_inline)) { v[L.position[r]] = value; });
   } else {
     double rows[size][kLanes];
-    for (int l = 0; l < kLanes; ++l) {
-      const Index* base = arguments.dof_base + static_cast<std::size_t>(elements[l]) * n;
-#pragma GCC unroll 128
-      for (int a = 0; a < n; ++a) {
-        const double* source = arguments.x + base[a];
-        rows[L.position[3 * a]][l] = source[0];
-        rows[L.position[3 * a + 1]][l] = source[1];
-        rows[L.position[3 * a + 2]][l] = source[2];
-      }
-    }
+    gather_scalar<n>(arguments, elements, n, [](int r) __attribute__((always_inline)) { return kFixedLayout<P>.position[r]; },
+                     rows[0]);
 #pragma GCC unroll 512
     for (int r = 0; r < size; ++r) v[r] = load_lanes(rows[r]);
   }
@@ -528,17 +562,8 @@ CRACKLE_HOT void fixed_batch(const BrickChunkArguments& arguments, Index b) {
   double rows[size][kLanes];
 #pragma GCC unroll 512
   for (int r = 0; r < size; ++r) store_lanes(rows[r], w[r]);
-  const int count = arguments.batch_count[b];
-  for (int l = 0; l < count; ++l) {
-    const Index* base = arguments.dof_base + static_cast<std::size_t>(elements[l]) * n;
-#pragma GCC unroll 128
-    for (int a = 0; a < n; ++a) {
-      double* target = arguments.y + base[a];
-      target[0] += scale * rows[L.position[3 * a]][l];
-      target[1] += scale * rows[L.position[3 * a + 1]][l];
-      target[2] += scale * rows[L.position[3 * a + 2]][l];
-    }
-  }
+  scatter_scalar<n>(arguments, elements, n, arguments.batch_count[b],
+                    [](int r) __attribute__((always_inline)) { return kFixedLayout<P>.position[r]; }, rows[0]);
 }
 
 CRACKLE_HOT void brick_batches_body(const BrickChunkArguments& arguments) {
@@ -560,23 +585,13 @@ CRACKLE_HOT void brick_batches_body(const BrickChunkArguments& arguments) {
     const int* position = matrix.position.data();
     const bool lattice = arguments.batch_lattice[b] != 0;
     const Index* first_dofs = arguments.dof_base + static_cast<std::size_t>(elements[0]) * n;
-    // Gather: row (a, c) of the buffer holds x at DOF c of node a of the kLanes elements (padding
-    // lanes repeat the first element). Scalar loads (hardware gathers are slower here), or vector
-    // loads and shuffles for lattice batches.
+    // Gather: scalar loads, or vector loads and shuffles for lattice batches.
     if (lattice) {
       gather_lattice_order1(arguments.x, first_dofs, [&](int r, const Lanes& value) __attribute__((always_inline)) {
         store_lanes(in + static_cast<std::size_t>(position[r]) * kLanes, value);
       });
     } else {
-    for (int l = 0; l < kLanes; ++l) {
-      const Index* base = arguments.dof_base + static_cast<std::size_t>(elements[l]) * n;
-      for (int a = 0; a < n; ++a) {
-        const double* source = arguments.x + base[a];
-        in[static_cast<std::size_t>(position[3 * a]) * kLanes + l] = source[0];
-        in[static_cast<std::size_t>(position[3 * a + 1]) * kLanes + l] = source[1];
-        in[static_cast<std::size_t>(position[3 * a + 2]) * kLanes + l] = source[2];
-      }
-    }
+      gather_scalar<0>(arguments, elements, n, [position](int r) __attribute__((always_inline)) { return position[r]; }, in);
     }
     // K annihilates translations: take the displacements relative to local node 0, so that a
     // uniform motion gives exactly zero force and rounding scales with the local variation only.
@@ -601,7 +616,7 @@ CRACKLE_HOT void brick_batches_body(const BrickChunkArguments& arguments) {
     }
     butterfly(matrix.butterflies, out);
     const double scale = arguments.scale;
-    // Scatter, one element after the other: elements of a batch may share nodes.
+    // Scatter-add (scalar, or shuffles and vector stores for lattice batches).
     if (lattice) {
       scatter_lattice_order1(
           [&](int r, Lanes& value) __attribute__((always_inline)) {
@@ -610,15 +625,8 @@ CRACKLE_HOT void brick_batches_body(const BrickChunkArguments& arguments) {
           scale, first_dofs, arguments.y);
       continue;
     }
-    for (int l = 0; l < count; ++l) {
-      const Index* base = arguments.dof_base + static_cast<std::size_t>(elements[l]) * n;
-      for (int a = 0; a < n; ++a) {
-        double* target = arguments.y + base[a];
-        target[0] += scale * out[static_cast<std::size_t>(position[3 * a]) * kLanes + l];
-        target[1] += scale * out[static_cast<std::size_t>(position[3 * a + 1]) * kLanes + l];
-        target[2] += scale * out[static_cast<std::size_t>(position[3 * a + 2]) * kLanes + l];
-      }
-    }
+    scatter_scalar<0>(arguments, elements, n, count, [position](int r) __attribute__((always_inline)) { return position[r]; },
+                      out);
   }
 }
 
