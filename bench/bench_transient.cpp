@@ -1,9 +1,9 @@
 /// Benchmark of the transient solver: nanoseconds per DOF and time step (internal forces,
 /// central-difference update, loads, contact, health checks) on box meshes of order p = 1..4,
 /// for 1 and 2 threads, with and without a crack in contact, and the share of the time spent in
-/// the contact forces. Usage:
+/// the contact forces (--chunk: elements per chunk of the operator, 0 = its own choice). Usage:
 ///   bench_transient [--orders 1,2,3,4] [--elements 1e4,1e5,1e6] [--threads 1,2] [--seconds 2]
-///                   [--max-dofs 3e7] [--crack] [--roofline]
+///                   [--max-dofs 3e7] [--chunk 0] [--crack] [--roofline]
 /// One line per case on stdout (a table), progress on stderr. --roofline adds, per case, the
 /// update of central differences timed alone (a system with no force: u, v, f, 1/m read, u, v, f
 /// written, 56 B per DOF) on vectors of the case's size, the bandwidth that gives, and the step's
@@ -68,7 +68,7 @@ int main(int argc, char** argv) {
   using namespace crackle;
   using bench::parse_list;
   std::vector<double> orders = {1, 2, 3, 4}, elements = {1e4, 1e5, 1e6}, threads = {1, 2};
-  double seconds = 2.0, max_dofs = 3e7;
+  double seconds = 2.0, max_dofs = 3e7, chunk = 0;
   bool crack = false, roofline = false;
   for (int k = 1; k < argc; ++k) {
     const std::string flag = argv[k];
@@ -78,11 +78,12 @@ int main(int argc, char** argv) {
     else if (flag == "--threads") threads = parse_list(value), ++k;
     else if (flag == "--seconds") seconds = std::stod(value), ++k;
     else if (flag == "--max-dofs") max_dofs = std::stod(value), ++k;
+    else if (flag == "--chunk") chunk = std::stod(value), ++k;
     else if (flag == "--crack") crack = true;
     else if (flag == "--roofline") roofline = true;
     else {
       std::fprintf(stderr, "usage: %s [--orders 1,2] [--elements 1e4,1e5] [--threads 1,2] [--seconds s] "
-                           "[--max-dofs n] [--crack] [--roofline]\n", argv[0]);
+                           "[--max-dofs n] [--chunk elements] [--crack] [--roofline]\n", argv[0]);
       return 2;
     }
   }
@@ -135,6 +136,7 @@ int main(int argc, char** argv) {
         omp_set_num_threads(thread_count);
         transient::TransientOptions options;
         options.progress = false;
+        options.elastic.chunk_elements = static_cast<Index>(chunk);
         options.end_time = 1.0;  // replaced once the step is known
         // Calibrate: a short run, then one of about `seconds`.
         options.end_time = 1e-12;

@@ -1,18 +1,21 @@
 #!/usr/bin/env bash
 # Runs the benchmarks and prints Markdown tables for docs/benchmarks.md.
-# Usage: scripts/bench.sh [assembly|modal|modal-scale|transient|spectrum|study|reduced|reduced-scale|reduced-composite|reduced-snapshots|sweep|all]   (default all)
+# Usage: scripts/bench.sh [assembly|modal|modal-scale|modal-calculix|transient|spectrum|study|reduced|reduced-scale|reduced-composite|reduced-snapshots|sweep|all]   (default all)
 # (sweep: data/beam.yaml by harmonic balance (cold cache), without stability and by stepped sine; cost and peaks vs H)
 # (reduced: data/beam.yaml full vs transient.model=reduced; FULL_DIR=dir reuses a full run's outputs)
 # (reduced-scale: bench_reduced, cost per step vs crack pairs (REDUCED_PAIRS, default 100..5000) and modes)
 # (reduced-composite: data/composite-plate.yaml full vs reduced, both cut to COMPOSITE_PERIODS periods (default 12))
 # (reduced-snapshots: data/beam.yaml reduced, cached reduction, with 0, 10 and 60 snapshots: the field recovery's cost)
 # (modal = work-precision + scale; modal-scale = the scale part alone)
+# (modal-calculix: bench/calculix_modal.py, crackle against CalculiX 2.20 on the open-crack beam, a = 0.3 h and
+#  0.5 h, 10 modes; installs calculix-ccx when ccx is missing; not part of all: ~15 min and ~3 GB, quiet machine)
 #
 # Environment:
 #   BUILD=dir        use an existing build folder (e.g. build-bench) and only rebuild it; without it
 #                    scripts/build.sh builds build/ first. BENCH_NO_BUILD=1: do not even rebuild it.
 #   BENCH_OUT=dir    where the runs write their outputs (default /tmp/crackle-bench).
 #   BENCH_LARGE=1    also run the ~600k-DOF modal case (ARPACK + CHOLMOD, about 6 min and 16 GB).
+#   CALCULIX_REUSE=1 modal-calculix keeps the runs already in $BENCH_OUT/calculix-modal.
 #   STUDY_DIR=dir    output folder of `crackle study data/depth-study.yaml` for the study section
 #                    (default /tmp/depth-study; STUDY_TIME=file with its /usr/bin/time output).
 # Every table is preceded by the load average at its start: the figures are best-of-N wall times
@@ -22,8 +25,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 what="${1:-all}"
-case "$what" in assembly|modal|modal-scale|transient|spectrum|study|reduced|reduced-scale|reduced-composite|reduced-snapshots|sweep|all) ;; *)
-  echo "usage: scripts/bench.sh [assembly|modal|modal-scale|transient|spectrum|study|reduced|reduced-scale|reduced-composite|reduced-snapshots|sweep|all]" >&2; exit 2 ;;
+case "$what" in assembly|modal|modal-scale|modal-calculix|transient|spectrum|study|reduced|reduced-scale|reduced-composite|reduced-snapshots|sweep|all) ;; *)
+  echo "usage: scripts/bench.sh [assembly|modal|modal-scale|modal-calculix|transient|spectrum|study|reduced|reduced-scale|reduced-composite|reduced-snapshots|sweep|all]" >&2; exit 2 ;;
 esac
 if [[ -n "${BUILD:-}" ]]; then
   [[ "${BENCH_NO_BUILD:-0}" == 1 ]] || cmake --build "$BUILD" -j"$(nproc)" >/dev/null
@@ -99,6 +102,23 @@ if want modal || want modal-scale; then
   if [[ "${BENCH_LARGE:-0}" == 1 ]]; then
     modal_case 29 arpack 1 2
   fi
+fi
+
+if [[ "$what" == modal-calculix ]]; then  # not in all
+  if ! command -v ccx > /dev/null; then
+    # As scripts/build.sh installs its packages; apt's output kept off the tables.
+    echo "scripts/bench.sh: installing calculix-ccx" >&2
+    sudo=""
+    if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+    $sudo apt-get update -qq >&2
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends calculix-ccx >&2
+  fi
+  echo
+  echo "### Modal work-precision against CalculiX $(dpkg-query -W -f='${Version}' calculix-ccx 2>/dev/null): open-crack beam, 10 modes (bench/calculix_modal.py)"
+  # The script prints the load average before each of its tables (one per crack depth).
+  reuse=()
+  if [[ "${CALCULIX_REUSE:-0}" == 1 ]]; then reuse=(--reuse); fi
+  python3 bench/calculix_modal.py "$crackle" "$out/calculix-modal" "${reuse[@]}"
 fi
 
 if want transient; then
