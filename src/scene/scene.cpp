@@ -106,32 +106,32 @@ Param build_parameters() {
     }),
     list_of("materials", "Materials by region (layered composites), instead of material: each element takes the "
                          "one material whose region holds its centroid.", {
-      text("name", "Name of the material, for messages and outputs.").required(),
+      text("name", "Name of the material, for messages and outputs.").required().to(&MaterialEntrySection::name),
       map_of("isotropic", "Isotropic elastic constants (give isotropic or orthotropic).", {
-        number("E", "Young's modulus.").with_unit("Pa").above(0).required(),
-        number("nu", "Poisson's ratio.").above(-1).below(0.5).required(),
+        number("E", "Young's modulus.").with_unit("Pa").above(0).required().to(&MaterialSection::young),
+        number("nu", "Poisson's ratio.").above(-1).below(0.5).required().to(&MaterialSection::poisson),
       }),
       map_of("orthotropic", "Orthotropic elastic constants in the material axes 1, 2, 3 (axis 3 = z); "
                             "nu_ij is the contraction along j under stress along i.", {
-        number("E1", "Young's modulus along axis 1.").with_unit("Pa").above(0).required(),
-        number("E2", "Young's modulus along axis 2.").with_unit("Pa").above(0).required(),
-        number("E3", "Young's modulus along axis 3.").with_unit("Pa").above(0).required(),
-        number("G12", "Shear modulus in the 12 plane.").with_unit("Pa").above(0).required(),
-        number("G13", "Shear modulus in the 13 plane.").with_unit("Pa").above(0).required(),
-        number("G23", "Shear modulus in the 23 plane.").with_unit("Pa").above(0).required(),
-        number("nu12", "Poisson's ratio nu12.").required(),
-        number("nu13", "Poisson's ratio nu13.").required(),
-        number("nu23", "Poisson's ratio nu23.").required(),
+        number("E1", "Young's modulus along axis 1.").with_unit("Pa").above(0).required().to(&OrthotropicSection::e1),
+        number("E2", "Young's modulus along axis 2.").with_unit("Pa").above(0).required().to(&OrthotropicSection::e2),
+        number("E3", "Young's modulus along axis 3.").with_unit("Pa").above(0).required().to(&OrthotropicSection::e3),
+        number("G12", "Shear modulus in the 12 plane.").with_unit("Pa").above(0).required().to(&OrthotropicSection::g12),
+        number("G13", "Shear modulus in the 13 plane.").with_unit("Pa").above(0).required().to(&OrthotropicSection::g13),
+        number("G23", "Shear modulus in the 23 plane.").with_unit("Pa").above(0).required().to(&OrthotropicSection::g23),
+        number("nu12", "Poisson's ratio nu12.").required().to(&OrthotropicSection::nu12),
+        number("nu13", "Poisson's ratio nu13.").required().to(&OrthotropicSection::nu13),
+        number("nu23", "Poisson's ratio nu23.").required().to(&OrthotropicSection::nu23),
       }),
-      number("rho", "Mass density.").with_unit("kg/m^3").above(0).required(),
+      number("rho", "Mass density.").with_unit("kg/m^3").above(0).required().to(&MaterialEntrySection::density),
       number("angle", "Ply angle: material axis 1 turned about z from x towards y.").with_unit("deg")
-          .defaults_to("0"),
+          .defaults_to("0").to(&MaterialEntrySection::angle),
       map_of("region", "Where the material is: coordinate ranges (box meshes get grid lines at their ends) "
                        "and/or a physical volume group of a Gmsh mesh; none: everywhere.", {
         number("x", "Range of the element centroids along x.").with_unit("m").list(2),
         number("y", "Range of the element centroids along y.").with_unit("m").list(2),
         number("z", "Range of the element centroids along z (a ply).").with_unit("m").list(2),
-        text("group", "Physical volume group of a Gmsh mesh."),
+        text("group", "Physical volume group of a Gmsh mesh.").to(&RegionSection::group),
       }).optional_section(),
     }),
     list_of("boundary", "Prescribed displacements on box faces or mesh groups; none: a free body.", {
@@ -479,6 +479,32 @@ void check_boundary(const Values& values, const std::vector<BoundarySection>& bo
   }
 }
 
+/// The table's declaration of the map (or list of maps) at a dotted key path (`transient.reduced`).
+const Param& declared(const std::string& path) {
+  const Param* param = &scene_parameters();
+  for (std::size_t start = 0; start <= path.size();) {
+    const std::size_t dot = std::min(path.find('.', start), path.size());
+    param = param->child(path.substr(start, dot - start));
+    if (!param) throw std::logic_error("no declared map " + path);
+    start = dot + 1;
+  }
+  return *param;
+}
+
+/// Fills the fields of `section` that the table binds below `path`, a dotted path of maps
+/// (`transient.reduced`): each key with `.to(&Section::field)` is read here, nowhere else.
+template <class S>
+void read_section(const Values& values, const std::string& path, S& section) {
+  read_bound(declared(path), values, path, section);
+}
+
+/// Fills the fields of `section` bound in entry `index` of the list of maps at `path`
+/// (`transient.probes`).
+template <class S>
+void read_entry(const Values& values, const std::string& path, int index, S& section) {
+  read_bound(declared(path), values, path + "[" + std::to_string(index) + "]", section);
+}
+
 mesh::CrackSpec crack_from(const Values& values, const mesh::BoxSpec& box) {
   mesh::CrackSpec crack;
   crack.normal = values.choice("crack.plane.normal", kAxisWords);
@@ -540,24 +566,22 @@ std::vector<MaterialEntrySection> materials_from(const Values& values, bool gmsh
   for (int i = 0; i < values.count("materials"); ++i) {
     const std::string entry = "materials[" + std::to_string(i) + "]";
     MaterialEntrySection material;
-    material.name = values.word(entry + ".name");
-    material.density = values.number(entry + ".rho");
-    material.angle = values.number(entry + ".angle");
+    read_entry(values, "materials", i, material);
     material.line = std::max(values.line(entry), 0);
     if (values.has(entry + ".isotropic") == values.has(entry + ".orthotropic")) {
       values.fail(entry, "isotropic or orthotropic constants",
                   values.has(entry + ".isotropic") ? "both" : "neither");
     }
+    const Param& declared_entry = declared("materials");
     if (values.has(entry + ".isotropic")) {
-      material.isotropic = MaterialSection{values.number(entry + ".isotropic.E"),
-                                           values.number(entry + ".isotropic.nu"), material.density};
+      MaterialSection isotropic;
+      read_bound(*declared_entry.child("isotropic"), values, entry + ".isotropic", isotropic);
+      isotropic.density = material.density;
+      material.isotropic = isotropic;
     } else {
-      const std::string o = entry + ".orthotropic.";
-      material.orthotropic = OrthotropicSection{values.number(o + "E1"),   values.number(o + "E2"),
-                                                values.number(o + "E3"),   values.number(o + "G12"),
-                                                values.number(o + "G13"),  values.number(o + "G23"),
-                                                values.number(o + "nu12"), values.number(o + "nu13"),
-                                                values.number(o + "nu23")};
+      OrthotropicSection orthotropic;
+      read_bound(*declared_entry.child("orthotropic"), values, entry + ".orthotropic", orthotropic);
+      material.orthotropic = orthotropic;
     }
     for (int axis = 0; axis < 3; ++axis) {
       const std::string key = entry + ".region." + kAxes[axis];
@@ -569,8 +593,10 @@ std::vector<MaterialEntrySection> materials_from(const Values& values, bool gmsh
       }
       material.region.range[axis] = std::array<double, 2>{range[0], range[1]};
     }
+    if (values.has(entry + ".region")) {
+      read_bound(*declared_entry.child("region"), values, entry + ".region", material.region);
+    }
     if (values.has(entry + ".region.group")) {
-      material.region.group = values.word(entry + ".region.group");
       if (!gmsh_mesh) {
         values.fail(entry + ".region.group", "coordinate ranges x, y, z (a box mesh has no groups)",
                     "'" + material.region.group + "'");
@@ -617,32 +643,6 @@ void check_file_safe_name(const Values& values, const std::string& path, const s
   }
   values.fail(path, "a name of letters, digits, _ . - (it names output files and CSV columns)",
               "'" + shown + "'");
-}
-
-/// The table's declaration of the map (or list of maps) at a dotted key path (`transient.reduced`).
-const Param& declared(const std::string& path) {
-  const Param* param = &scene_parameters();
-  for (std::size_t start = 0; start <= path.size();) {
-    const std::size_t dot = std::min(path.find('.', start), path.size());
-    param = param->child(path.substr(start, dot - start));
-    if (!param) throw std::logic_error("no declared map " + path);
-    start = dot + 1;
-  }
-  return *param;
-}
-
-/// Fills the fields of `section` that the table binds below `path`, a dotted path of maps
-/// (`transient.reduced`): each key with `.to(&Section::field)` is read here, nowhere else.
-template <class S>
-void read_section(const Values& values, const std::string& path, S& section) {
-  read_bound(declared(path), values, path, section);
-}
-
-/// Fills the fields of `section` bound in entry `index` of the list of maps at `path`
-/// (`transient.probes`).
-template <class S>
-void read_entry(const Values& values, const std::string& path, int index, S& section) {
-  read_bound(declared(path), values, path + "[" + std::to_string(index) + "]", section);
 }
 
 /// `transient.excitation`: a frequency for a harmonic drive, a duration for a pulse, nothing else.
