@@ -145,9 +145,9 @@ Param build_parameters() {
     map_of("crack", "An axis-aligned rectangular crack on a grid plane of a box mesh (plane and region), or a "
                     "physical surface group of a Gmsh mesh (group); none: no crack.", {
       map_of("plane", "The plane of the crack.", {
-        choice("normal", "Axis normal to the crack.", kAxisWords).required(),
+        choice("normal", "Axis normal to the crack.", kAxisWords).required().to(&mesh::CrackSpec::normal),
         number("at", "Position of the plane along the normal; must be a grid plane origin + k size/cells "
-                     "strictly inside the body.").with_unit("m").required(),
+                     "strictly inside the body.").with_unit("m").required().to(&mesh::CrackSpec::at),
       }),
       map_of("region", "Rectangle on the plane: [low, high] along each of the two in-plane axes, which "
                        "are exactly its keys.", {
@@ -171,7 +171,7 @@ Param build_parameters() {
       }).optional_section(),
       text("group", "Physical surface group of a Gmsh mesh: its nodes are split except on the crack front."),
       number("gap", "Initial normal gap g0 (MODEL.md eq. 9): > 0 open, < 0 pre-compressed.").with_unit("m")
-          .defaults_to("0"),
+          .defaults_to("0").to(&mesh::CrackSpec::gap),
       map_of("contact", "Penalty contact between the crack faces in transient runs (MODEL.md eq. 25d, 15).", {
         choice("model", "penalty: the crack faces touch (penalty springs, a breathing crack); none: no contact, "
                         "the faces pass through each other (the open body, a linear run at the open "
@@ -506,10 +506,10 @@ void read_entry(const Values& values, const std::string& path, int index, S& sec
 }
 
 mesh::CrackSpec crack_from(const Values& values, const mesh::BoxSpec& box) {
+  // plane.normal, plane.at and gap (crack.reference's keys are not bound: they are a second
+  // CrackSpec's, read by reference_crack_from, and would land in this one's fields).
   mesh::CrackSpec crack;
-  crack.normal = values.choice("crack.plane.normal", kAxisWords);
-  crack.at = values.number("crack.plane.at");
-  crack.gap = values.number("crack.gap");
+  read_section(values, "crack", crack);
 
   std::vector<std::string> in_plane, given;
   for (int axis = 0; axis < 3; ++axis) {
