@@ -6,7 +6,7 @@ machine in the same run.
 Usage: bench/calculix_modal.py CRACKLE OUTDIR [--reuse] [--quick] [--element C3D20R|C3D20]
                                [--reference stored|run] [--ccx-clamp-layers N] [--ccx-threads OMP,SPOOLES]
                                [--validate]
-  CRACKLE     the crackle binary ('-': /tmp/crackle_ref)
+  CRACKLE     the crackle binary (e.g. build/apps/crackle)
   --reuse     keep the runs already in OUTDIR
   --quick     only the two smallest meshes per code (for testing the script)
   --element   CalculiX element type (default C3D20R: 20-node bricks, reduced integration)
@@ -210,7 +210,7 @@ def vtu_labels(path):
                    key=lambda i: sum((points[3 * i + d] - target[d]) ** 2 for d in range(3)))
         corners.append(best)
     labels = []
-    for name in sorted(set(re.findall(r'Name="(mode_\d+)"', header))):
+    for name in sorted(set(re.findall(r'Name="(mode_\d+)"', header)), key=lambda n: int(n[5:])):
         u = read_array(name)
         labels.append(mode_label([(points[3 * i + 1], points[3 * i + 2], u[3 * i], u[3 * i + 1], u[3 * i + 2])
                                   for i in corners]))
@@ -601,7 +601,7 @@ def main():
     args = parser.parse_args()
     sys.stdout.reconfigure(line_buffering=True)  # the tables and the progress lines on stderr in order
     threads = tuple(int(t) for t in args.ccx_threads.split(","))
-    crackle = "/tmp/crackle_ref" if args.crackle == "-" else os.path.abspath(args.crackle)
+    crackle = os.path.abspath(args.crackle)
     outdir = os.path.abspath(args.outdir)
     os.makedirs(outdir, exist_ok=True)
     if shutil.which("ccx") is None:
