@@ -45,14 +45,35 @@ Param sweep_end(const std::string& name, const std::string& doc) {
   }).or_scalar_for("hz").exactly_one_of({"hz", "mode"}).required();
 }
 
-/// An optional map of position lists along x, y and z [m], at most `most` per axis.
-Param axis_positions(const std::string& name, const std::string& doc, int most) {
+/// An optional map of position lists along x, y and z [m], at most `most` per axis, each bound to
+/// its axis's entry of `field`.
+template <class S>
+Param axis_positions(const std::string& name, const std::string& doc, int most,
+                     std::array<std::vector<double>, 3> S::*field) {
   return map_of(name, doc, {
-    number("x", "Positions along x.").with_unit("m").list(1, most),
-    number("y", "Positions along y.").with_unit("m").list(1, most),
-    number("z", "Positions along z.").with_unit("m").list(1, most),
+    number("x", "Positions along x.").with_unit("m").list(1, most).to(field, kX),
+    number("y", "Positions along y.").with_unit("m").list(1, most).to(field, kY),
+    number("z", "Positions along z.").with_unit("m").list(1, most).to(field, kZ),
   }).optional_section();
 }
+
+/// A crack's rectangle: [low, high] along each in-plane axis [m], bound to `field`'s entry of the axis.
+template <class S>
+Param crack_extent(const std::string& name, const std::string& doc, std::array<std::array<double, 2>, 3> S::*field) {
+  return map_of(name, doc, {
+    number("x", "Extent along x.").with_unit("m").list(2).to(field, kX),
+    number("y", "Extent along y.").with_unit("m").list(2).to(field, kY),
+    number("z", "Extent along z.").with_unit("m").list(2).to(field, kZ),
+  }).optional_section();
+}
+
+/// `crack.reference`'s keys, bound apart from mesh::CrackSpec so that reading the crack's own
+/// section (which walks the whole `crack` map) never lands a reference value in the crack: the
+/// fields start at the crack's own, and the keys given replace them.
+struct CrackReferenceSection {
+  double at = 0.0;
+  std::array<std::array<double, 2>, 3> region{};
+};
 
 Param build_parameters() {
   const auto& faces = mesh::box_face_names();
@@ -70,7 +91,8 @@ Param build_parameters() {
             .to(&mesh::BoxSpec::order),
         axis_positions("lines", "Extra grid lines along each axis, added to the uniform ones (a study puts the "
                                 "crack edges of all its cases here so that they share one mesh); lines on or "
-                                "outside the boundary and repeated lines are ignored.", 100000),
+                                "outside the boundary and repeated lines are ignored.", 100000,
+                       &mesh::BoxSpec::extra_lines),
         map_of("grading", "Grid lines graded geometrically towards the crack front (the crack-tip singularity "
                           "otherwise limits every order p to first-order convergence): on each side of the "
                           "front, lines at h ratio^k, k = 1..layers, h the distance to the next grid line. "
@@ -83,15 +105,17 @@ Param build_parameters() {
                          "crackle identify and crackle plan (their ratios on a uniform grid: docs/benchmarks.md "
                          "section 13.7); always: graded for every "
                          "command (with the reduced model the way to an accurate A2/A1, docs/benchmarks.md "
-                         "section 5.1); none: no grading.", kGradingModeWords).defaults_to("auto"),
+                         "section 5.1); none: no grading.", kGradingModeWords).defaults_to("auto")
+              .to(&GradingSection::mode),
           integer("layers", "Geometric layers on each side of the front; auto: p - 1 + round(log2(D/h)) "
                               "in 1..4, h the uniform cell size across the front, D the body's thinnest side.").at_least(1)
-              .at_most(8).or_word("auto").defaults_to("auto"),
+              .at_most(8).or_word("auto").defaults_to("auto").to(&mesh::Grading::layers),
           number("ratio", "Ratio of successive layers; auto: 0.2.").above(0).below(1).or_word("auto")
-              .defaults_to("auto"),
+              .defaults_to("auto").to(&mesh::Grading::ratio),
           axis_positions("fronts", "Further positions to grade towards along each axis, besides the crack's "
                                    "own front (a study puts the fronts of all its cases here, so that they "
-                                   "share one mesh); positions on or outside the boundary are ignored.", 10000),
+                                   "share one mesh); positions on or outside the boundary are ignored.", 10000,
+                         &mesh::Grading::fronts),
         }).or_scalar_for("mode"),
       }),
       text("gmsh", "Gmsh MSH 4.1 file (ASCII or binary), relative to the scene file's folder: 8- or 27-node "
@@ -149,12 +173,8 @@ Param build_parameters() {
         number("at", "Position of the plane along the normal; must be a grid plane origin + k size/cells "
                      "strictly inside the body.").with_unit("m").required().to(&mesh::CrackSpec::at),
       }),
-      map_of("region", "Rectangle on the plane: [low, high] along each of the two in-plane axes, which "
-                       "are exactly its keys.", {
-        number("x", "Extent along x.").with_unit("m").list(2),
-        number("y", "Extent along y.").with_unit("m").list(2),
-        number("z", "Extent along z.").with_unit("m").list(2),
-      }).optional_section(),
+      crack_extent("region", "Rectangle on the plane: [low, high] along each of the two in-plane axes, which "
+                             "are exactly its keys.", &mesh::CrackSpec::region),
       map_of("reference", "The crack the box grid is made for, when it differs from the crack itself: the grid lines "
                           "(crack edges, grading) are placed for this crack, then moved piecewise linearly along each "
                           "axis so that they land on the crack's own plane and edges. The topology then does not "
@@ -162,12 +182,9 @@ Param build_parameters() {
                           "(`crackle identify` sets it to the middle of its bounds). The crack's own plane may then "
                           "lie anywhere inside the body.", {
         number("at", "Plane position of the reference crack; default: the crack's own (must be a grid plane).")
-            .with_unit("m"),
-        map_of("region", "Extent of the reference crack; each axis defaults to the crack's own.", {
-          number("x", "Extent along x.").with_unit("m").list(2),
-          number("y", "Extent along y.").with_unit("m").list(2),
-          number("z", "Extent along z.").with_unit("m").list(2),
-        }).optional_section(),
+            .with_unit("m").to(&CrackReferenceSection::at),
+        crack_extent("region", "Extent of the reference crack; each axis defaults to the crack's own.",
+                     &CrackReferenceSection::region),
       }).optional_section(),
       text("group", "Physical surface group of a Gmsh mesh: its nodes are split except on the crack front."),
       number("gap", "Initial normal gap g0 (MODEL.md eq. 9): > 0 open, < 0 pre-compressed.").with_unit("m")
@@ -506,8 +523,8 @@ void read_entry(const Values& values, const std::string& path, int index, S& sec
 }
 
 mesh::CrackSpec crack_from(const Values& values, const mesh::BoxSpec& box) {
-  // plane.normal, plane.at and gap (crack.reference's keys are not bound: they are a second
-  // CrackSpec's, read by reference_crack_from, and would land in this one's fields).
+  // plane.normal, plane.at, region and gap (crack.reference's keys are bound to
+  // CrackReferenceSection, read by reference_crack_from).
   mesh::CrackSpec crack;
   read_section(values, "crack", crack);
 
@@ -524,10 +541,6 @@ mesh::CrackSpec crack_from(const Values& values, const mesh::BoxSpec& box) {
                 : given.size() == 1 ? given[0]
                                     : given[0] + " and " + given[1]);
   }
-  for (const std::string& axis : in_plane) {
-    const auto& range = values.numbers("crack.region." + axis);
-    crack.region[*value_of(kAxisWords, axis)] = {range[0], range[1]};
-  }
   const bool has_reference = values.has("crack.reference");
   const std::string problem = mesh::check_crack(box, crack, !has_reference);
   if (!problem.empty()) values.fail("crack." + problem.substr(0, problem.find(':')), "crack." + problem);
@@ -538,17 +551,15 @@ mesh::CrackSpec crack_from(const Values& values, const mesh::BoxSpec& box) {
 std::optional<mesh::CrackSpec> reference_crack_from(const Values& values, const mesh::BoxSpec& box,
                                                     const mesh::CrackSpec& crack) {
   if (!values.has("crack.reference")) return std::nullopt;
-  mesh::CrackSpec reference = crack;
-  if (values.has("crack.reference.at")) reference.at = values.number("crack.reference.at");
-  for (int axis = 0; axis < 3; ++axis) {
-    const std::string key = "crack.reference.region." + kAxes[axis];
-    if (!values.has(key)) continue;
-    if (axis == crack.normal) {
-      values.fail(key, "the in-plane axes of the crack's region", kAxes[axis] + " (the crack's normal)");
-    }
-    const auto& range = values.numbers(key);
-    reference.region[axis] = {range[0], range[1]};
+  const std::string along_normal = "crack.reference.region." + kAxes[crack.normal];
+  if (values.has(along_normal)) {
+    values.fail(along_normal, "the in-plane axes of the crack's region", kAxes[crack.normal] + " (the crack's normal)");
   }
+  CrackReferenceSection section{crack.at, crack.region};
+  read_section(values, "crack.reference", section);
+  mesh::CrackSpec reference = crack;
+  reference.at = section.at;
+  reference.region = section.region;
   const std::string problem = mesh::check_crack(box, reference);
   if (!problem.empty()) values.fail("crack.reference." + problem.substr(0, problem.find(':')), "crack.reference." + problem);
   return reference;
@@ -835,20 +846,13 @@ void mesh_from(const Values& values, Scene& scene) {
     if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
       values.fail("mesh.gmsh", "a Gmsh mesh file", "a device or pipe, '" + scene.gmsh_file + "'");
   } else {
-    read_section(values, "mesh.box", scene.box);
-    for (int axis = 0; axis < 3; ++axis) {
-      const std::string key = "mesh.box.lines." + kAxes[axis];
-      if (values.has(key)) scene.box.extra_lines[axis] = values.numbers(key);
-    }
-    scene.grading.mode = values.choice("mesh.box.grading.mode", kGradingModeWords);
+    read_section(values, "mesh.box", scene.box);  // with the lines
+    read_section(values, "mesh.box.grading", scene.grading);  // the mode
+    // layers: auto is the scene's default (mesh::Grading's own, 0, means no grading); ratio: auto
+    // keeps mesh::Grading's 0.2.
     mesh::Grading grading;
     grading.layers = mesh::kAutoLayers;
-    if (!values.is_word("mesh.box.grading.layers")) grading.layers = values.integer("mesh.box.grading.layers");
-    if (!values.is_word("mesh.box.grading.ratio")) grading.ratio = values.number("mesh.box.grading.ratio");
-    for (int axis = 0; axis < 3; ++axis) {
-      const std::string key = "mesh.box.grading.fronts." + kAxes[axis];
-      if (values.has(key)) grading.fronts[axis] = values.numbers(key);
-    }
+    read_section(values, "mesh.box.grading", grading);
     scene.grading.grading = grading;
   }
 }

@@ -113,6 +113,18 @@ struct Param {
     return *this;
   }
 
+  /// Binds a scalar list to entry `index` of the std::array `field` of S: the axes' keys of a map
+  /// (`crack.region.y` to `region[kY]`, `mesh.box.lines.x` to `extra_lines[kX]`).
+  template <class S, class A>
+  Param& to(A S::*field, int index) {
+    binding.section = typeid(S);
+    binding.assign = [field, index, convert = choice_value](const Values& values, const std::string& path, void* section) {
+      (static_cast<S*>(section)->*field).at(static_cast<std::size_t>(index)) =
+          bound_value<typename A::value_type>(values, path, convert);
+    };
+    return *this;
+  }
+
   bool is_list_of_scalars() const { return max_length > 0; }
   /// The child with this name, or nullptr.
   const Param* child(const std::string& child_name) const;

@@ -117,6 +117,50 @@ TEST(Scene, DefaultsComeFromTheTable) {
   EXPECT_EQ(cracked.boundary[0].values, (std::vector<double>{0, 0}));
 }
 
+TEST(Scene, TheGridsKeysAndTheReferenceCrackLandInTheirOwnFields) {
+  // mesh.box.lines and mesh.box.grading: each axis's list in its own entry, the grading's words.
+  const Scene graded = parse_scene(
+      box() + "    lines: {x: [0.002, 0.004], z: [0.001]}\n"
+              "    grading: {mode: always, layers: 3, ratio: 0.3, fronts: {y: [0.005]}}\n" + material(),
+      "beam.yaml");
+  EXPECT_EQ(graded.box.extra_lines[kX], (std::vector<double>{0.002, 0.004}));
+  EXPECT_TRUE(graded.box.extra_lines[kY].empty());
+  EXPECT_EQ(graded.box.extra_lines[kZ], (std::vector<double>{0.001}));
+  EXPECT_EQ(graded.grading.mode, GradingMode::always);
+  EXPECT_EQ(graded.grading.grading.layers, 3);
+  EXPECT_EQ(graded.grading.grading.ratio, 0.3);
+  EXPECT_TRUE(graded.grading.grading.fronts[kX].empty());
+  EXPECT_EQ(graded.grading.grading.fronts[kY], (std::vector<double>{0.005}));
+  EXPECT_EQ(graded.box.grading.layers, 0) << "the box's own grading is set per command";
+  // auto: the layers from the order (mesh::kAutoLayers), the ratio mesh::Grading's own.
+  const Scene plain = parse_scene(kBody, "beam.yaml");
+  EXPECT_EQ(plain.grading.mode, GradingMode::automatic);
+  EXPECT_EQ(plain.grading.grading.layers, mesh::kAutoLayers);
+  EXPECT_EQ(plain.grading.grading.ratio, mesh::Grading{}.ratio);
+  EXPECT_EQ(parse_scene(box() + "    grading: none\n" + material(), "beam.yaml").grading.mode, GradingMode::none);
+
+  // crack.reference's at and region are the reference's: the crack keeps its own plane and region,
+  // and the reference's axes not given are the crack's.
+  const Scene moved = parse_scene(kBody + crack("normal: x, at: 0.0537", "y: [0.0, 0.02], z: [0.0072, 0.01]") +
+                                      "  reference: {at: 0.05, region: {z: [0.007, 0.01]}}\n",
+                                  "beam.yaml");
+  ASSERT_TRUE(moved.crack && moved.crack_reference);
+  EXPECT_EQ(moved.crack->at, 0.0537);
+  EXPECT_EQ(moved.crack->region[kZ], (std::array<double, 2>{0.0072, 0.01}));
+  EXPECT_EQ(moved.crack->region[kY], (std::array<double, 2>{0.0, 0.02}));
+  EXPECT_EQ(moved.crack_reference->at, 0.05);
+  EXPECT_EQ(moved.crack_reference->region[kZ], (std::array<double, 2>{0.007, 0.01}));
+  EXPECT_EQ(moved.crack_reference->region[kY], (std::array<double, 2>{0.0, 0.02}));
+  EXPECT_EQ(moved.crack_reference->normal, kX);
+  const Scene only_region = parse_scene(kBody + crack("normal: x, at: 0.05", "y: [0.0, 0.02], z: [0.0072, 0.01]") +
+                                            "  reference: {region: {z: [0.007, 0.01]}}\n",
+                                        "beam.yaml");
+  EXPECT_EQ(only_region.crack_reference->at, 0.05);
+  EXPECT_EQ(only_region.crack->region[kZ], (std::array<double, 2>{0.0072, 0.01}));
+  EXPECT_EQ(error_of(kBody + crack() + "  reference: {region: {x: [0.04, 0.06]}}\n"),
+            "beam.yaml:10: crack.reference.region.x: expected the in-plane axes of the crack's region, got x (the crack's normal)");
+}
+
 TEST(Scene, ConsistentBoundaryConditionsAreAccepted) {
   const Scene scene =
       parse_scene(kBody +
