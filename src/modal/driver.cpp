@@ -26,6 +26,27 @@ MacWeighting parse_mac_weighting(const std::string& name, const std::string& key
   return parse_word(kMacWeightingWords, name, key);
 }
 
+VariantResult::VariantResult(VariantResult&& other) noexcept
+    : variant(other.variant),
+      dofs(std::move(other.dofs)),
+      constraints(std::move(other.constraints)),
+      modes(std::move(other.modes)),
+      n_pieces(other.n_pieces),
+      assembly_s(other.assembly_s) {
+  mass.swap(other.mass);
+}
+
+VariantResult& VariantResult::operator=(VariantResult&& other) noexcept {
+  variant = other.variant;
+  dofs = std::move(other.dofs);
+  constraints = std::move(other.constraints);
+  mass.swap(other.mass);
+  modes = std::move(other.modes);
+  n_pieces = other.n_pieces;
+  assembly_s = other.assembly_s;
+  return *this;
+}
+
 const VariantResult* ModalResult::find(mesh::Variant variant) const {
   for (const VariantResult& result : variants) {
     if (result.variant == variant) return &result;
@@ -158,6 +179,7 @@ ModalResult run_modal(const std::function<const fem::System&(mesh::Variant)>& sy
     result.options.variants = {mesh::Variant::uncracked};
     if (system_for(mesh::Variant::uncracked).mesh().has_crack()) result.options.variants.push_back(mesh::Variant::open);
   }
+  result.variants.reserve(result.options.variants.size());
   for (const mesh::Variant variant : result.options.variants) {
     if (result.find(variant)) {
       throw InputError(std::string("modal.variants lists '") + mesh::variant_name(variant) + "' twice");

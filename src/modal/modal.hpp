@@ -124,6 +124,15 @@ struct VariantResult {
   ModeSet modes;
   int n_pieces = 1;
   double assembly_s = 0.0;
+
+  VariantResult() = default;
+  VariantResult(const VariantResult&) = default;
+  VariantResult& operator=(const VariantResult&) = default;
+  /// Moves swap the mass matrix in: Eigen 3.4's SparseMatrix has no move constructor, so the
+  /// implicit move copied it (hundreds of MB at order 4, when ModalResult::variants grows or a result
+  /// is handed on). A member added above must be added to both.
+  VariantResult(VariantResult&& other) noexcept;
+  VariantResult& operator=(VariantResult&& other) noexcept;
 };
 
 /// An open mode paired to an uncracked mode.

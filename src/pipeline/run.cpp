@@ -52,14 +52,17 @@ RunOutcome run_scene(const scene::Scene& scene, const RunCommandOptions& options
   std::vector<Stage>& stages = outcome.stages;
 
   Stage modal_stage{"modal", false, "", 0.0};
-  std::optional<modal::ModalResult> modes;
-  if (shared && reuse->modes.count(reuse->key)) {
-    modes = reuse->modes.at(reuse->key);
-    modal_stage = {"modal", modes.has_value(), "shared with the run of the same mesh in this process", 0.0};
+  // The modes of a shared mesh are read where the first run left them (a copy would hold both
+  // variants' shapes and mass matrices again).
+  std::optional<modal::ModalResult> own_modes;
+  const bool shared_modes = shared && reuse->modes.count(reuse->key);
+  if (shared_modes) {
+    modal_stage = {"modal", reuse->modes.at(reuse->key).has_value(), "shared with the run of the same mesh in this process", 0.0};
   } else {
-    modes = run_modal_stage(scene, model, directory, options.modal_cache, modal_stage, out,
-                            scene.transient->model == scene::TransientModel::reduced);
+    own_modes = run_modal_stage(scene, model, directory, options.modal_cache, modal_stage, out,
+                                scene.transient->model == scene::TransientModel::reduced);
   }
+  const std::optional<modal::ModalResult>& modes = shared_modes ? reuse->modes.at(reuse->key) : own_modes;
   stages.push_back(modal_stage);
   outcome.mode = excitation_mode(scene, modes);
 
@@ -112,7 +115,7 @@ RunOutcome run_scene(const scene::Scene& scene, const RunCommandOptions& options
   }
   stages.push_back(spectrum_stage);
   if (reuse && !shared) {
-    reuse->modes[reuse->key] = modes;
+    reuse->modes[reuse->key] = std::move(own_modes);  // `modes` is not used below
     reuse->models[reuse->key] = std::move(own_model);
   }
   outcome.frequency = setup.frequency;
