@@ -88,6 +88,39 @@ SparseMatrix restrict_to_free(const SparseMatrix& matrix, const Constraints& con
   return result;
 }
 
+SparseMatrix restrict_to_free(SparseMatrix&& matrix, const Constraints& constraints) {
+  if (!matrix.isCompressed()) return restrict_to_free(static_cast<const SparseMatrix&>(matrix), constraints);
+  assert(matrix.rows() == static_cast<Index>(constraints.fixed.size()));
+  assert(matrix.cols() == static_cast<Index>(constraints.fixed.size()));
+  const Index n = constraints.n_free();
+  Index* outer = matrix.outerIndexPtr();
+  Index* columns = matrix.innerIndexPtr();
+  double* values = matrix.valuePtr();
+  // Rows in increasing order, each entry written at or before where it was read (k counts the
+  // entries kept so far, at most those read so far): the compaction never overwrites an entry still
+  // to be read. outer[free_dofs[i]] is read before outer[i] is written (free_dofs[i] >= i).
+  Index k = 0;
+  for (Index i = 0; i < n; ++i) {
+    if ((i & 4095) == 4095) poll_interrupt();
+    const Index row = constraints.free_dofs[i];
+    const Index begin = outer[row], end = outer[row + 1];
+    outer[i] = k;
+    for (Index e = begin; e < end; ++e) {
+      const Index column = constraints.free_index[columns[e]];
+      if (column < 0) continue;
+      columns[k] = column;
+      values[k] = values[e];
+      ++k;
+    }
+  }
+  outer[n] = k;
+  // n x n over the first n + 1 row starts; conservativeResize keeps the entries (uncompressed, each
+  // row's count from the row starts) and makeCompressed only sets the size (the rows are contiguous).
+  matrix.conservativeResize(n, n);
+  matrix.makeCompressed();
+  return std::move(matrix);
+}
+
 VectorX restrict_to_free(const VectorX& full, const Constraints& constraints) {
   assert(full.size() == static_cast<Index>(constraints.fixed.size()));
   VectorX free(constraints.n_free());

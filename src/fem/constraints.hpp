@@ -31,6 +31,9 @@ Constraints make_constraints(const mesh::DofMap& dofs, const std::vector<Dirichl
 
 /// The free-free block of a matrix over all DOFs (Dirichlet DOFs eliminated).
 SparseMatrix restrict_to_free(const SparseMatrix& matrix, const Constraints& constraints);
+/// The same block made in the matrix's own storage (an assembled K or M handed over): the kept
+/// entries move forward in place, so no second matrix of the same size is allocated and zeroed.
+SparseMatrix restrict_to_free(SparseMatrix&& matrix, const Constraints& constraints);
 
 /// Entries of a vector over all DOFs at the free DOFs, and back (zeros, or the prescribed values,
 /// at fixed DOFs).

@@ -122,5 +122,31 @@ TEST(Constraints, RestrictAndExpand) {
   EXPECT_EQ(back[dofs.dof(3, 2)], -0.25);
 }
 
+TEST(Constraints, RestrictingAnAssembledMatrixInPlaceGivesTheCopysEntries) {
+  // The first node fixed (its rows and columns), a middle node's one component, and the last node.
+  const GridMesh grid = grid_mesh(2, {3, 2, 1}, Vec3(3.0, 2.0, 1.0), 0.0);
+  const mesh::DofMap dofs = identity_dofs(grid.mesh);
+  const SparseMatrix stiffness = assemble_stiffness(grid.mesh, dofs, {isotropic(1.0, 0.3, 1.0)});
+  const Index last = grid.mesh.n_nodes() - 1;
+  const Constraints constraints =
+      make_constraints(dofs, {{{0, 7, last}, {0, 1, 2}, {0.0, 0.0, 0.0}, "a"}, {{20}, {1}, {0.0}, "b"}});
+  const SparseMatrix copied = restrict_to_free(stiffness, constraints);
+  SparseMatrix handed = stiffness;
+  const SparseMatrix in_place = restrict_to_free(std::move(handed), constraints);
+  ASSERT_EQ(in_place.rows(), constraints.n_free());
+  ASSERT_EQ(in_place.cols(), constraints.n_free());
+  ASSERT_TRUE(in_place.isCompressed());
+  ASSERT_EQ(in_place.nonZeros(), copied.nonZeros());
+  for (Index i = 0; i <= constraints.n_free(); ++i) ASSERT_EQ(in_place.outerIndexPtr()[i], copied.outerIndexPtr()[i]) << i;
+  for (Index k = 0; k < copied.nonZeros(); ++k) {
+    ASSERT_EQ(in_place.innerIndexPtr()[k], copied.innerIndexPtr()[k]) << k;
+    ASSERT_EQ(in_place.valuePtr()[k], copied.valuePtr()[k]) << k;
+  }
+  // Nothing fixed: the matrix as it was.
+  SparseMatrix whole = stiffness;
+  const SparseMatrix unchanged = restrict_to_free(std::move(whole), make_constraints(dofs, {}));
+  EXPECT_EQ((MatrixX(unchanged) - MatrixX(stiffness)).norm(), 0.0);
+}
+
 }  // namespace
 }  // namespace crackle::fem
