@@ -47,6 +47,9 @@ struct RunCommandOptions {
   /// run.json or sweep.json of an earlier estimate on the same mesh: the tolerance loop starts at the
   /// setting it reached (pipeline/refinement.hpp, tolerance_start); empty: at the scene's own.
   std::filesystem::path accuracy_start;
+  /// false: the figures' data and scripts only, gnuplot not run (the accuracy's refinement runs,
+  /// whose figures are drawn when their folder is adopted: RefinementFolders::adopt).
+  bool draw_plots = true;
 };
 
 /// `crackle run`: modal (only if needed) -> transient -> spectrum; writes run.json (the stages

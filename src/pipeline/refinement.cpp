@@ -6,11 +6,13 @@
 #include <cstdio>
 #include <iomanip>
 #include <ostream>
+#include <set>
 
 #include "core/errors.hpp"
 #include "io/files.hpp"
 #include "mesh/box.hpp"
 #include "pipeline/modal_accuracy.hpp"
+#include "plot/gnuplot.hpp"
 
 namespace crackle::pipeline {
 
@@ -136,9 +138,18 @@ fs::path RefinementFolders::folder(const Setting& setting, bool first) {
 void RefinementFolders::adopt(const Setting& setting) const {
   const fs::path from = folders_.at(setting.key());
   if (from == output_) return;
+  std::set<fs::path> moved;
   for (const fs::directory_entry& entry : fs::directory_iterator(from)) {
     if (!entry.is_regular_file()) continue;
     fs::rename(entry.path(), output_ / entry.path().filename());
+    moved.insert(entry.path().filename());
+  }
+  // A refinement run writes its figures' data and scripts without drawing them (draw_plots): drawn
+  // now, over the PNGs of the scene's own run, which are of other data.
+  for (const fs::path& name : moved) {
+    if (name.extension() != ".gp") continue;
+    const fs::path png = fs::path(name).replace_extension(".png");
+    if (!moved.count(png)) plot::run_gnuplot(output_ / png, output_ / name, plot::PlotOptions{});
   }
 }
 

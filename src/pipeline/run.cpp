@@ -102,14 +102,15 @@ RunOutcome run_scene(const scene::Scene& scene, const RunCommandOptions& options
     Stopwatch clock;
     spectrum_stage.ran = true;
     spectrum_stage.reason = "the scene has a spectrum: section";
-    on_writer_rank([&] { outcome.spectrum = spectrum->write(scene, directory, dt, outcome.probes, out); });
+    on_writer_rank([&] { outcome.spectrum = spectrum->write(scene, directory, dt, outcome.probes, out, options.draw_plots); });
     spectrum_stage.seconds = clock.seconds();
   } else if (scene.spectrum) {
     Stopwatch clock;
     spectrum_stage.ran = true;
     spectrum_stage.reason = "the scene has a spectrum: section; no harmonic excitation: ring-down analysis";
     on_writer_rank([&] {
-      write_ringdown_spectrum(scene, directory, solver ? solver->probes() : reduced_probes, setup, modes, out);
+      write_ringdown_spectrum(scene, directory, solver ? solver->probes() : reduced_probes, setup, modes, out,
+                              options.draw_plots);
     });
     spectrum_stage.seconds = clock.seconds();
   }

@@ -24,6 +24,7 @@ const RunOutcome& RefinementRuns::get(const Setting& setting, bool first) {
   if (!first) {
     for (const scene::Override& level : level_overrides(setting)) overrides.push_back(level);
     options.progress = false;
+    options.draw_plots = false;  // ~0.1 s a figure; drawn if the run's folder is adopted
   }
   const scene::Scene scene = first ? scene_ : scene::load_scene(options_.scene_path, overrides);
   NullStream silent;

@@ -75,7 +75,7 @@ SpectrumMonitor::SpectrumMonitor(const scene::Scene& scene, double frequency, do
 }
 
 nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::filesystem::path& directory, double dt,
-                                      std::vector<ProbeSignature>& signatures, std::ostream& out) {
+                                      std::vector<ProbeSignature>& signatures, std::ostream& out, bool draw_plots) {
   const double frequency = options_.excitation_frequency_hz;
   // Close the record: grid points of the last period still waiting for stencil samples.
   for (std::size_t p = 0; p < probes_.size(); ++p) monitor_.accumulator(p).finish();
@@ -93,6 +93,7 @@ nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::file
   spectral::SpectrumAnalyzer analyzer;
   spectral::Window amplitude_window = spectrum_.window;  // auto's choice, once a probe's spectrum is made
   plot::PlotOptions plot;
+  plot.draw = draw_plots;
   for (std::size_t p = 0; p < probes_.size(); ++p) {
     const ProbeSpectrum& probe = probes_[p];
     const spectral::HarmonicAccumulator& accumulator = monitor_.accumulator(p);
@@ -125,7 +126,7 @@ nlohmann::json SpectrumMonitor::write(const scene::Scene& scene, const std::file
       const auto history_plot = spectral::plot_time_history(directory / ("history_" + probe.name + ".png"), values, sampling, plot);
       spectral::plot_spectrum(directory / ("spectrum_" + probe.name + ".png"), amplitude, frequency,
                               spectral::harmonic_orders(options_), plot);
-      if (!history_plot.written) out << "note: no plots (" << history_plot.note << ")\n";
+      if (!history_plot.written && draw_plots) out << "note: no plots (" << history_plot.note << ")\n";
     }
     const spectral::DamageIndices indices = spectral::damage_indices(table);
     out << "spectrum " << probe.name << " (" << probe.quantity << "): A1 = " << table.amplitude(1) << " m, A2/A1 = "
@@ -210,7 +211,7 @@ spectral::FrequencyResponse write_frf(const std::filesystem::path& directory, co
 /// the envelope of its orders plotted; after a pulse also the FRF estimate H = X/F (CSV and plot).
 void write_ringdown_spectrum(const scene::Scene& scene, const std::filesystem::path& directory, const transient::ProbeHistory& history,
                              const TransientSetup& setup, const std::optional<modal::ModalResult>& modes,
-                             std::ostream& out) {
+                             std::ostream& out, bool draw_plots) {
   const scene::SpectrumSection& spectrum = *scene.spectrum;
   const scene::TransientSection& section = *scene.transient;
   const std::optional<scene::ExcitationSection>& excitation = section.excitation;
@@ -226,6 +227,7 @@ void write_ringdown_spectrum(const scene::Scene& scene, const std::filesystem::p
   options.start_time = spectrum.ringdown_start.value_or(pulse ? excitation->duration : 0.0);
   std::vector<output::RingdownProbe> probes;
   plot::PlotOptions plot;
+  plot.draw = draw_plots;
   for (std::size_t p = 0; p < section.probes.size(); ++p) {
     const scene::ProbeSection& probe = section.probes[p];
     const int component = analysed_component(probe, default_component);
@@ -268,7 +270,7 @@ void write_ringdown_spectrum(const scene::Scene& scene, const std::filesystem::p
         frf_plot.unit = "m/N";
         spectral::plot_frf(directory / ("frf_" + probe.name + ".png"), *frf, reference, frf_plot);
       }
-      if (!history_plot.written) out << "note: no plots (" << history_plot.note << ")\n";
+      if (!history_plot.written && draw_plots) out << "note: no plots (" << history_plot.note << ")\n";
     }
     probes.push_back(std::move(entry));
   }

@@ -77,8 +77,9 @@ class SpectrumMonitor {
 
   /// Stage 3: closes the records, writes the spectra and the plots; returns spectrum.json's content
   /// (written by the command once the accuracy is known) and the probes' signatures.
+  /// draw_plots false: the figures' data and scripts only (plot::PlotOptions::draw).
   nlohmann::json write(const scene::Scene& scene, const std::filesystem::path& directory, double dt,
-                       std::vector<ProbeSignature>& signatures, std::ostream& out);
+                       std::vector<ProbeSignature>& signatures, std::ostream& out, bool draw_plots = true);
 
  private:
   const scene::SpectrumSection& spectrum_;
@@ -92,7 +93,7 @@ class SpectrumMonitor {
 /// the envelope of its orders plotted; after a pulse also the FRF estimate H = X/F (CSV and plot).
 void write_ringdown_spectrum(const scene::Scene& scene, const std::filesystem::path& directory, const transient::ProbeHistory& history,
                              const TransientSetup& setup, const std::optional<modal::ModalResult>& modes,
-                             std::ostream& out);
+                             std::ostream& out, bool draw_plots = true);
 
 /// Displacement snapshots (VTU) at evenly spaced steps of a run, only when asked, and
 /// snapshots.pvd: the collection with their times, rewritten after each one (ParaView plays it as

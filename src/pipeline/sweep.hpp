@@ -105,6 +105,8 @@ struct SweepCommandOptions {
   std::filesystem::path accuracy_start;
   std::vector<std::pair<double, double>> windows;  ///< SweepSettings::windows (refinement sweeps only)
   WindowStarts window_starts;                      ///< SweepSettings::window_starts
+  /// false: the figures' data and scripts only (RunCommandOptions::draw_plots; refinement sweeps).
+  bool draw_plots = true;
 };
 
 /// `crackle sweep`: modal stage (for mode-relative ranges) -> reduced model -> sweep; writes

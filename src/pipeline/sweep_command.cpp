@@ -56,16 +56,17 @@ SweepProgress progress_line(std::ostream& progress, bool enabled) {
 
 /// sweep.csv and the plots (sweep.json is written by the caller, with the route and accuracy).
 void write_outputs(const fs::path& directory, const SweepResult& result, const SweepSettings& settings,
-                   std::ostream& out) {
+                   bool draw_plots, std::ostream& out) {
   io::write_csv(directory / "sweep.csv", output::sweep_table(result, file_settings(settings)));
   if (!settings.section.plots) return;
   for (std::size_t p = 0; p < settings.probes.size(); ++p) {
     plot::PlotOptions plot;
+    plot.draw = draw_plots;
     plot.title = settings.probes[p].name + " u_" + axis_name(settings.probes[p].component) + ", " +
                  scene::method_name(settings.section.method);
     const plot::PlotResult drawn = plot_sweep(directory / ("sweep_" + settings.probes[p].name + ".png"), result,
                                                   settings, p, plot);
-    if (!drawn.written) out << "note: no plot (" << drawn.note << ")\n";
+    if (!drawn.written && draw_plots) out << "note: no plot (" << drawn.note << ")\n";
   }
 }
 
@@ -143,7 +144,7 @@ SweepOutcome sweep_scene(const scene::Scene& scene, const SweepCommandOptions& o
   // the modal stage's size: the frequencies' estimate is Richardson in DOFs^-1/3
   if (modes) document["model"]["free_dofs"] = modes->free_dofs();
   document["seconds_per_point"] = result.points.empty() ? 0.0 : result.solve_s / double(result.points.size());
-  write_outputs(directory, result, settings, out);
+  write_outputs(directory, result, settings, options.draw_plots, out);
   print_summary(result, document, out);
   document["wall_s"] = total.seconds();
   return {std::move(document), total.seconds(), std::move(result)};

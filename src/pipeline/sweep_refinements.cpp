@@ -63,6 +63,7 @@ SweepOutcome RefinementSweeps::sweep(const Setting& setting, bool first, const S
   if (!first) {
     for (const scene::Override& level : level_overrides(setting, windows != nullptr)) overrides.push_back(level);
     options.progress = false;
+    options.draw_plots = false;  // drawn if the sweep's folder is adopted (RefinementFolders::adopt)
     if (windows) {
       options.windows = windows->windows;
       options.window_starts = starts_;

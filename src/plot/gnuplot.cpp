@@ -79,6 +79,10 @@ PlotResult draw(const fs::path& png, const std::string& data, const std::string&
                          "set title " + gnuplot_quote(options.title) + "\nset grid\n" + script_body;
     write_text(result.data, data);
     write_text(result.script, script);
+    if (!options.draw) {
+      result.note = "not drawn (its script " + result.script.filename().string() + " is written)";
+      return result;
+    }
     run_script(png, result.script, options, result);
   } catch (const std::exception& error) {
     result.written = false;

@@ -16,6 +16,9 @@ struct PlotOptions {
   std::string unit = "m";               ///< unit of the signal
   std::string gnuplot = "gnuplot";      ///< executable: a name looked up in PATH, or a path
   int width = 1000, height = 600;       ///< the PNG's size [pixels]
+  /// false: the data and the script are written, gnuplot is not run (a figure that may never be
+  /// looked at, drawn later by run_gnuplot on its script: an accuracy refinement run's).
+  bool draw = true;
 };
 
 /// Outcome of a plot.

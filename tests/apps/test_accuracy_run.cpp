@@ -233,13 +233,25 @@ TEST(Accuracy, ARunStartsItsToleranceLoopWhereAnEarlierRunOfTheSameMeshEnded) {
   // Both share a modal cache, as a study's cases do: the follower's order-4 run reads its modes and
   // reduction from it.
   const std::string cache = " --modal-cache " + (scratch() / "start-cache").string();
-  const cli_testing::Result leader = run_scene_text("leader", graded_toleranced("20.0"), cache);
+  const cli_testing::Result leader = run_scene_text("leader", graded_toleranced("20.0"), cache + " --set spectrum.plots=true");
   ASSERT_EQ(leader.exit_code, 0) << leader.output;
   const nlohmann::json first = read_json(scratch() / "leader" / "spectrum.json");
   ASSERT_TRUE(first["accuracy"]["met"].get<bool>()) << first["accuracy"].dump(1);
   const nlohmann::json reached = read_json(scratch() / "leader" / "run.json")["accuracy"]["reached"];
   EXPECT_EQ(reached, first["accuracy"]["reached"]);
   EXPECT_EQ(reached["order"], 4) << reached;
+  // The folder holds the adopted run's figures: refinement runs write their data and scripts only,
+  // and the adoption draws them, over the PNGs the scene's own run drew earlier (no PNG older than
+  // its script).
+  int scripts = 0;
+  for (const fs::directory_entry& entry : fs::directory_iterator(scratch() / "leader")) {
+    if (entry.path().extension() != ".gp") continue;
+    ++scripts;
+    const fs::path png = fs::path(entry.path()).replace_extension(".png");
+    ASSERT_TRUE(fs::exists(png)) << png;
+    EXPECT_GE(fs::last_write_time(png), fs::last_write_time(entry.path())) << png;
+  }
+  EXPECT_EQ(scripts, 2) << "the tip's history and spectrum";
 
   const std::string start = (scratch() / "leader" / "run.json").string();
   const cli_testing::Result follower =
