@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "core/errors.hpp"
+#include "core/fftw_buffer.hpp"
 
 namespace crackle::spectral {
 namespace {
@@ -33,17 +34,6 @@ struct Plan {
   }
 };
 
-/// Buffer from fftw_malloc (the alignment the plans were made for).
-template <typename T>
-struct FftwBuffer {
-  explicit FftwBuffer(std::size_t n) : data(static_cast<T*>(fftw_malloc(sizeof(T) * n))) {
-    if (!data) throw std::bad_alloc();
-  }
-  ~FftwBuffer() { fftw_free(data); }
-  FftwBuffer(const FftwBuffer&) = delete;
-  FftwBuffer& operator=(const FftwBuffer&) = delete;
-  T* data;
-};
 
 
 }  // namespace

@@ -15,6 +15,7 @@
 
 #include "contact_law/penalty.hpp"
 #include "core/errors.hpp"
+#include "core/fftw_buffer.hpp"
 #include "sweep/harmonic_balance.hpp"
 
 namespace crackle::sweep {
@@ -142,17 +143,17 @@ struct HarmonicBalance::Impl {
   /// Time samples (c x N, row-major by row) of a harmonic vector.
   MatrixX to_time(const VectorX& x) const {
     MatrixX samples(c, N);
-    std::vector<fftw_complex> spectrum(N / 2 + 1);
-    std::vector<double> signal(N);
+    FftwBuffer<fftw_complex> spectrum(N / 2 + 1);
+    FftwBuffer<double> signal(N);
     for (Index i = 0; i < c; ++i) {
-      for (auto& s : spectrum) s[0] = s[1] = 0.0;
+      for (int k = 0; k <= N / 2; ++k) spectrum[k][0] = spectrum[k][1] = 0.0;
       spectrum[0][0] = x[i];
       for (int k = 1; k <= H; ++k) {
         const Complex a = amplitude(x, k, i) * 0.5;
         spectrum[k][0] = a.real();
         spectrum[k][1] = a.imag();
       }
-      fftw_execute_dft_c2r(backward, spectrum.data(), signal.data());
+      fftw_execute_dft_c2r(backward, spectrum.data, signal.data);
       for (int j = 0; j < N; ++j) samples(i, j) = signal[j];
     }
     return samples;
@@ -161,11 +162,11 @@ struct HarmonicBalance::Impl {
   /// Harmonics 0..H of time samples (c x N), real layout.
   VectorX to_harmonics(const MatrixX& samples) const {
     VectorX x = VectorX::Zero(n_unknowns());
-    std::vector<fftw_complex> spectrum(N / 2 + 1);
-    std::vector<double> signal(N);
+    FftwBuffer<fftw_complex> spectrum(N / 2 + 1);
+    FftwBuffer<double> signal(N);
     for (Index i = 0; i < c; ++i) {
       for (int j = 0; j < N; ++j) signal[j] = samples(i, j);
-      fftw_execute_dft_r2c(forward, signal.data(), spectrum.data());
+      fftw_execute_dft_r2c(forward, signal.data, spectrum.data);
       x[i] = spectrum[0][0] / N;
       for (int k = 1; k <= H; ++k)
         set_amplitude(x, k, i, Complex(spectrum[k][0], spectrum[k][1]) * (2.0 / N));
@@ -266,13 +267,13 @@ struct HarmonicBalance::Impl {
     const int nc = 2 * H + 1;
     const int nd = 3 * nc;
     MatrixX block = MatrixX::Zero(nd, nd);
-    std::vector<double> signal(N);
-    std::vector<fftw_complex> spectrum(N / 2 + 1);
+    FftwBuffer<double> signal(N);
+    FftwBuffer<fftw_complex> spectrum(N / 2 + 1);
     for (int local = 0; local < 3; ++local)
       for (int col = 0; col < nd; ++col) {
         if (tangent[local].col(col).cwiseAbs().maxCoeff() == 0.0) continue;
         for (int j = 0; j < N; ++j) signal[j] = tangent[local](j, col);
-        fftw_execute_dft_r2c(forward, signal.data(), spectrum.data());
+        fftw_execute_dft_r2c(forward, signal.data, spectrum.data);
         block(local, col) = spectrum[0][0] / N;
         for (int k = 1; k <= H; ++k) {
           block((2 * k - 1) * 3 + local, col) = 2.0 * spectrum[k][0] / N;
@@ -338,10 +339,10 @@ struct HarmonicBalance::Impl {
 
   /// Block of dP/dG of one row (2H+1 square, component order 0, a_1, b_1, ...), from the DFT of the slope.
   MatrixX force_derivative(const MatrixX& slope, Index i) const {
-    std::vector<double> signal(N);
-    std::vector<fftw_complex> spectrum(N / 2 + 1);
+    FftwBuffer<double> signal(N);
+    FftwBuffer<fftw_complex> spectrum(N / 2 + 1);
     for (int j = 0; j < N; ++j) signal[j] = slope(i, j);
-    fftw_execute_dft_r2c(forward, signal.data(), spectrum.data());
+    fftw_execute_dft_r2c(forward, signal.data, spectrum.data);
     VectorX dc(2 * H + 1), ds(2 * H + 1);
     for (int k = 0; k <= 2 * H; ++k) {
       dc[k] = spectrum[k][0] / N;

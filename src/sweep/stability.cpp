@@ -61,12 +61,12 @@ Stability HarmonicBalance::hill_stability(const Solution& sol, double tolerance)
   // Fourier coefficients K_j = (1/N) sum_n K(tau_n) e^{-i j tau_n}, j = 0..2H, one r2c per entry
   std::vector<ComplexMatrixX> khat(2 * H + 1, ComplexMatrixX::Zero(m, m));
   {
-    std::vector<double> signal(N);
-    std::vector<fftw_complex> spectrum(N / 2 + 1);
+    FftwBuffer<double> signal(N);
+    FftwBuffer<fftw_complex> spectrum(N / 2 + 1);
     for (Index r = 0; r < m; ++r)
       for (Index q = 0; q < m; ++q) {
         for (int n = 0; n < N; ++n) signal[n] = stiff[n](r, q);
-        fftw_execute_dft_r2c(d.forward, signal.data(), spectrum.data());
+        fftw_execute_dft_r2c(d.forward, signal.data, spectrum.data);
         for (int jj = 0; jj <= 2 * H; ++jj) khat[jj](r, q) = Complex(spectrum[jj][0], spectrum[jj][1]) / double(N);
       }
   }
