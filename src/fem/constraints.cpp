@@ -1,5 +1,6 @@
 #include "fem/constraints.hpp"
 
+#include <algorithm>
 #include <cassert>
 #include <string>
 
@@ -88,8 +89,13 @@ SparseMatrix restrict_to_free(const SparseMatrix& matrix, const Constraints& con
   return result;
 }
 
-SparseMatrix restrict_to_free(SparseMatrix&& matrix, const Constraints& constraints) {
-  if (!matrix.isCompressed()) return restrict_to_free(static_cast<const SparseMatrix&>(matrix), constraints);
+namespace {
+
+/// The free-free block of a compressed `matrix` in its own storage: the kept entries move forward,
+/// and the result takes the arrays over (no entry copied twice, no allocation of their size: Eigen
+/// 3.4's SparseMatrix has no move constructor, and makeCompressed() would reallocate them).
+SparseMatrix compact_to_free(SparseMatrix& matrix, const Constraints& constraints) {
+  assert(matrix.isCompressed());
   assert(matrix.rows() == static_cast<Index>(constraints.fixed.size()));
   assert(matrix.cols() == static_cast<Index>(constraints.fixed.size()));
   const Index n = constraints.n_free();
@@ -114,11 +120,18 @@ SparseMatrix restrict_to_free(SparseMatrix&& matrix, const Constraints& constrai
     }
   }
   outer[n] = k;
-  // n x n over the first n + 1 row starts; conservativeResize keeps the entries (uncompressed, each
-  // row's count from the row starts) and makeCompressed only sets the size (the rows are contiguous).
-  matrix.conservativeResize(n, n);
-  matrix.makeCompressed();
-  return std::move(matrix);
+  SparseMatrix result(n, n);  // compressed, n + 1 row starts
+  std::copy(outer, outer + n + 1, result.outerIndexPtr());
+  result.data().swap(matrix.data());  // the compacted arrays, at their size (their capacity kept)
+  result.data().resize(k);
+  return result;
+}
+
+}  // namespace
+
+SparseMatrix restrict_to_free(SparseMatrix&& matrix, const Constraints& constraints) {
+  if (!matrix.isCompressed()) return restrict_to_free(static_cast<const SparseMatrix&>(matrix), constraints);
+  return compact_to_free(matrix, constraints);
 }
 
 VectorX restrict_to_free(const VectorX& full, const Constraints& constraints) {

@@ -132,7 +132,9 @@ TEST(Constraints, RestrictingAnAssembledMatrixInPlaceGivesTheCopysEntries) {
       make_constraints(dofs, {{{0, 7, last}, {0, 1, 2}, {0.0, 0.0, 0.0}, "a"}, {{20}, {1}, {0.0}, "b"}});
   const SparseMatrix copied = restrict_to_free(stiffness, constraints);
   SparseMatrix handed = stiffness;
+  const double* storage = handed.valuePtr();
   const SparseMatrix in_place = restrict_to_free(std::move(handed), constraints);
+  EXPECT_EQ(in_place.valuePtr(), storage) << "the entries were copied, not compacted in place";
   ASSERT_EQ(in_place.rows(), constraints.n_free());
   ASSERT_EQ(in_place.cols(), constraints.n_free());
   ASSERT_TRUE(in_place.isCompressed());
