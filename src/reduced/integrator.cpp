@@ -13,7 +13,6 @@
 
 namespace crackle::reduced {
 using detail::kLocalNormal;
-using detail::nonzero_rows;
 
 namespace {
 
@@ -427,7 +426,8 @@ double ReducedIntegrator::residual_strain(const VectorX& p, double a) const {
   // 1/2 p^T R p + a p^T r_f over the loaded rows, R read by its columns (contiguous; p is zero off
   // the loaded rows): R's indexed view read by rows cost as much as the rest of the step.
   double quadratic = 0.0, load = 0.0;
-  for (const Index j : nonzero_rows(p)) {
+  for (Index j = 0; j < p.size(); ++j) {  // no list of the loaded rows: this runs twice a step
+    if (p[j] == 0.0) continue;
     quadratic += p[j] * system_.residual.col(j).dot(p);
     load += p[j] * system_.load_residual[j];
   }

@@ -850,10 +850,8 @@ void mesh_from(const Values& values, Scene& scene) {
     read_section(values, "mesh.box.grading", scene.grading);  // the mode
     // layers: auto is the scene's default (mesh::Grading's own, 0, means no grading); ratio: auto
     // keeps mesh::Grading's 0.2.
-    mesh::Grading grading;
-    grading.layers = mesh::kAutoLayers;
-    read_section(values, "mesh.box.grading", grading);
-    scene.grading.grading = grading;
+    scene.grading.grading.layers = mesh::kAutoLayers;
+    read_section(values, "mesh.box.grading", scene.grading.grading);
   }
 }
 
