@@ -12,6 +12,8 @@ namespace {
 
 constexpr char kMagic[8] = {'C', 'R', 'K', 'M', 'O', 'D', 'E', '3'};  ///< 3: keyed by the inputs of K and M
 const std::string kPrefix = "modes";
+constexpr char kMacMagic[8] = {'C', 'R', 'K', 'M', 'A', 'C', '0', '1'};
+const std::string kMacPrefix = "mac";
 
 void mix(std::uint64_t& hash, const void* data, std::size_t bytes) { fingerprint_mix(hash, data, bytes); }
 
@@ -86,6 +88,27 @@ void store_cached_modes(const std::filesystem::path& directory, std::uint64_t ke
   out.put_matrix(modes.rigid_frequencies_hz);
   out.put_matrix(modes.rigid_shapes);
   out.store(directory, kPrefix);
+}
+
+std::uint64_t mac_key(std::uint64_t uncracked_key, std::uint64_t open_key, MacWeighting weighting) {
+  std::uint64_t hash = kFingerprintSeed;
+  mix(hash, kMacMagic, sizeof kMacMagic);
+  const std::uint64_t parts[3] = {uncracked_key, open_key, static_cast<std::uint64_t>(weighting)};
+  mix(hash, parts, sizeof parts);
+  return hash;
+}
+
+std::optional<MatrixX> load_cached_mac(const std::filesystem::path& directory, std::uint64_t key, Index rows, Index cols) {
+  io::CacheReader in(directory, kMacPrefix, kMacMagic, key);
+  MatrixX mac;
+  if (!in.get_matrix(mac) || mac.rows() != rows || mac.cols() != cols) return std::nullopt;
+  return mac;
+}
+
+void store_cached_mac(const std::filesystem::path& directory, std::uint64_t key, const MatrixX& mac) {
+  io::CacheWriter out(kMacMagic, key);
+  out.put_matrix(mac);
+  out.store(directory, kMacPrefix);
 }
 
 }  // namespace crackle::modal

@@ -23,4 +23,15 @@ std::optional<ModeSet> load_cached_modes(const std::filesystem::path& directory,
 /// Stores a mode set atomically (several processes may store the same key at once).
 void store_cached_modes(const std::filesystem::path& directory, std::uint64_t key, const ModeSet& modes);
 
+/// Fingerprint of the open-to-uncracked MAC matrix: the two variants' problem keys and the weighting.
+/// A run whose two mode sets both come from the cache reads its MAC too, and so assembles no mass
+/// matrix at all (the mass-weighted MAC is its only use there).
+std::uint64_t mac_key(std::uint64_t uncracked_key, std::uint64_t open_key, MacWeighting weighting);
+
+/// The cached MAC matrix of this key (`rows` uncracked x `cols` open modes), if one was stored.
+std::optional<MatrixX> load_cached_mac(const std::filesystem::path& directory, std::uint64_t key, Index rows, Index cols);
+
+/// Stores a MAC matrix atomically.
+void store_cached_mac(const std::filesystem::path& directory, std::uint64_t key, const MatrixX& mac);
+
 }  // namespace crackle::modal

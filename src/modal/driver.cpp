@@ -32,7 +32,8 @@ VariantResult::VariantResult(VariantResult&& other) noexcept
       constraints(std::move(other.constraints)),
       modes(std::move(other.modes)),
       n_pieces(other.n_pieces),
-      assembly_s(other.assembly_s) {
+      assembly_s(other.assembly_s),
+      cache_key(other.cache_key) {
   mass.swap(other.mass);
 }
 
@@ -44,6 +45,7 @@ VariantResult& VariantResult::operator=(VariantResult&& other) noexcept {
   modes = std::move(other.modes);
   n_pieces = other.n_pieces;
   assembly_s = other.assembly_s;
+  cache_key = other.cache_key;
   return *this;
 }
 
@@ -91,6 +93,43 @@ std::vector<double> nodal_shape(const mesh::Mesh& mesh, const VariantResult& var
 
 namespace {
 
+/// The variant's mass matrix over its free DOFs (consistent or lumped, as the options say).
+void assemble_mass(const fem::System& system, const ModalOptions& options, VariantResult& solved) {
+  if (options.lumped_mass) {
+    const VectorX lumped = fem::restrict_to_free(system.lumped_mass(), solved.constraints);
+    solved.mass.resize(lumped.size(), lumped.size());
+    solved.mass.reserve(Eigen::VectorXi::Ones(lumped.size()));
+    for (Index i = 0; i < lumped.size(); ++i) solved.mass.insert(i, i) = lumped[i];
+    solved.mass.makeCompressed();
+  } else {
+    SparseMatrix restricted = fem::restrict_to_free(system.assemble_consistent_mass(), solved.constraints);
+    solved.mass.swap(restricted);
+  }
+}
+
+/// The open modes' MAC against the uncracked ones: read from the cache where both mode sets were
+/// (then no mass is assembled), else computed (the uncracked mass assembled first if the modes came
+/// from the cache) and stored.
+MatrixX open_mac(VariantResult& uncracked, const VariantResult& open, const fem::System& uncracked_system,
+                 const ModalOptions& options) {
+  const bool cached = uncracked.cache_key != 0 && open.cache_key != 0;
+  const std::uint64_t key = cached ? mac_key(uncracked.cache_key, open.cache_key, options.mac) : 0;
+  const Index rows = uncracked.modes.shapes.cols(), cols = open.modes.shapes.cols();
+  if (cached) {
+    if (std::optional<MatrixX> mac = load_cached_mac(options.cache_directory, key, rows, cols)) return std::move(*mac);
+  }
+  const bool weighted = options.mac == MacWeighting::mass;
+  if (weighted && uncracked.mass.size() == 0) {
+    Stopwatch watch;
+    assemble_mass(uncracked_system, options, uncracked);
+    uncracked.assembly_s += watch.seconds();
+  }
+  const MatrixX open_shapes = open_on_uncracked_dofs(open.modes.shapes, open, uncracked);
+  MatrixX mac = mac_matrix(uncracked.modes.shapes, open_shapes, weighted ? &uncracked.mass : nullptr);
+  if (cached && is_output_rank()) store_cached_mac(options.cache_directory, key, mac);
+  return mac;
+}
+
 /// Assembles and solves one variant.
 VariantResult solve_variant(const fem::System& system, const ModalOptions& options) {
   const mesh::Mesh& mesh = system.mesh();
@@ -115,16 +154,8 @@ VariantResult solve_variant(const fem::System& system, const ModalOptions& optio
     stiffness.swap(restricted);
   }
   poll_interrupt();
-  if (options.lumped_mass) {
-    const VectorX lumped = fem::restrict_to_free(system.lumped_mass(), solved.constraints);
-    solved.mass.resize(lumped.size(), lumped.size());
-    solved.mass.reserve(Eigen::VectorXi::Ones(lumped.size()));
-    for (Index i = 0; i < lumped.size(); ++i) solved.mass.insert(i, i) = lumped[i];
-    solved.mass.makeCompressed();
-  } else {
-    SparseMatrix restricted = fem::restrict_to_free(system.assemble_consistent_mass(), solved.constraints);
-    solved.mass.swap(restricted);
-  }
+  solved.cache_key = key;
+  if (!from_cache) assemble_mass(system, options, solved);  // else only if the MAC needs it (run_modal)
   solved.n_pieces = count_pieces(mesh, solved.dofs);
   const int n_rigid = count_rigid_body_modes(mesh, solved.dofs, solved.constraints);
   solved.assembly_s = watch.seconds();
@@ -187,12 +218,14 @@ ModalResult run_modal(const std::function<const fem::System&(mesh::Variant)>& sy
     result.variants.push_back(solve_variant(system_for(variant), options));
   }
 
-  const VariantResult* uncracked = result.find(mesh::Variant::uncracked);
-  const VariantResult* open = result.find(mesh::Variant::open);
+  VariantResult* uncracked = nullptr;
+  const VariantResult* open = nullptr;
+  for (VariantResult& solved : result.variants) {
+    if (solved.variant == mesh::Variant::uncracked) uncracked = &solved;
+    if (solved.variant == mesh::Variant::open) open = &solved;
+  }
   if (uncracked && open) {
-    const MatrixX open_shapes = open_on_uncracked_dofs(open->modes.shapes, *open, *uncracked);
-    result.mac = mac_matrix(uncracked->modes.shapes, open_shapes,
-                            options.mac == MacWeighting::mass ? &uncracked->mass : nullptr);
+    result.mac = open_mac(*uncracked, *open, system_for(mesh::Variant::uncracked), options);
     result.pairs = pair_modes(uncracked->modes.frequencies_hz, open->modes.frequencies_hz, result.mac);
   }
   result.total_s = total.seconds();

@@ -120,10 +120,13 @@ struct VariantResult {
   mesh::Variant variant = mesh::Variant::uncracked;
   mesh::DofMap dofs;
   fem::Constraints constraints;
-  SparseMatrix mass;  ///< over the free DOFs (consistent or lumped), for MAC and checks
+  /// Over the free DOFs (consistent or lumped), for the mass-weighted MAC; empty where the modes came
+  /// from the cache and the MAC too (nothing needed it).
+  SparseMatrix mass;
   ModeSet modes;
   int n_pieces = 1;
   double assembly_s = 0.0;
+  std::uint64_t cache_key = 0;  ///< problem_key (modal/cache.hpp) where a cache directory was given, else 0
 
   VariantResult() = default;
   VariantResult(const VariantResult&) = default;
