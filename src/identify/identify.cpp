@@ -106,10 +106,10 @@ Measurement measurement_from(const YAML::Node& node, const std::string& file, co
 /// Half-width of the sweep about a drive frequency, relative.
 constexpr double kSweepHalfWidth = 1e-4;
 
-/// The forward model: batches of parameter vectors run as studies of `crackle modal` cases for the
-/// frequencies and, when harmonic quantities are measured, of `crackle sweep` cases (one per drive
-/// frequency: a narrow harmonic-balance sweep about it) for those. Two studies, one per command; both
-/// grade the mesh towards the crack front (run_forward_cases).
+/// The forward model: batches of parameter vectors run as studies of `crackle sweep` cases (one per
+/// drive frequency: a narrow harmonic-balance sweep about it) when harmonic quantities are measured,
+/// whose modal stages also give the frequencies; else of `crackle modal` cases. Both grade the mesh
+/// towards the crack front (run_forward_cases).
 class Forward {
  public:
   Forward(const IdentifySpec& spec, YAML::Node base, const scene::DampingSection& damping,
