@@ -283,6 +283,23 @@ TEST(Identify, FrequenciesAndHarmonicRatiosOfAConvergedModel) {
     }
   }
   EXPECT_EQ(ratios, 2);
+  // The frequencies come from the sweep cases' own modal stage (the same graded mesh and modal
+  // section): no study of `crackle modal` cases runs beside them, in the map or in the fits, and the
+  // frequencies' model values are within their model error of the converged measurements.
+  EXPECT_TRUE(fs::exists(dir / "out" / "map" / "sweep" / "runs"));
+  EXPECT_FALSE(fs::exists(dir / "out" / "map" / "runs"));
+  for (const auto& batch : fs::directory_iterator(dir / "out" / "fit")) {
+    EXPECT_TRUE(fs::exists(batch.path() / "sweep" / "runs")) << batch.path();
+    EXPECT_FALSE(fs::exists(batch.path() / "runs")) << batch.path();
+  }
+  int frequencies = 0;
+  for (const json& row : document["residuals"]) {
+    if (row["quantity"] == "A2/A1" || row["quantity"] == "A3/A1") continue;
+    ++frequencies;
+    const double value = row["value"].get<double>(), model = row["model"].get<double>();
+    EXPECT_LT(std::abs(model - value), 3.0 * std::hypot(row["sigma"].get<double>(), row["model_error"].get<double>())) << row;
+  }
+  EXPECT_EQ(frequencies, 5);
 }
 
 TEST(Identify, AMeasuredDampingRatioIdentifiesTheDampingWithTheCrack) {
