@@ -322,8 +322,11 @@ std::vector<fs::path> run_forward_cases(const YAML::Node& base, const std::vecto
   study.retry_failed = true;
   // Modal batches: every case has its own (moved) mesh, so a cache would only add a primer per case.
   // Sweep batches: the cases of one crack (its drive points and frequencies) share one modal cache
-  // folder, so the modal stage and the reduction of a drive point are computed once for them.
-  study.modal_cache = command == "sweep";
+  // folder, so the modal stage and the reduction of a drive point are computed once for them. With
+  // the runner's one folder (crackle plan) every batch writes there: the sweeps at a crack and order
+  // read the modes, and the MAC, that the modal batch solved for it (docs/benchmarks.md section 15, one modal cache).
+  study.modal_cache = command == "sweep" || !runner.modal_cache.empty();
+  study.modal_cache_directory = runner.modal_cache;
   study.gnuplot = "";
   std::ostringstream quiet;
   const int code = study::run_study(study, progress ? log : quiet);

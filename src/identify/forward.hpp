@@ -61,6 +61,10 @@ struct ForwardCase {
 struct ForwardRunner {
   std::string executable;  ///< the crackle executable
   int jobs = 0;            ///< forward runs at a time; 0: the cores
+  /// One modal cache folder for every batch, modal and sweep (its entries are keyed by content): a
+  /// sweep case then reads the modes a modal case of the same crack and order solved. Empty: sweep
+  /// batches keep a folder per crack, modal batches none.
+  std::string modal_cache;
 };
 
 /// Runs the cases as one study of `crackle <command>` cases (command "modal" or "sweep") in

@@ -266,7 +266,7 @@ class Forward {
       }
     }
     const std::vector<fs::path> folders = run_forward_cases(document, spec_.unknowns, cases, drives.empty() ? "modal" : "sweep",
-                                                            folder, {options_.executable, options_.jobs}, log_,
+                                                            folder, {options_.executable, options_.jobs, ""}, log_,
                                                             progress && options_.progress);
     runs_ += static_cast<int>(std::set<fs::path>(folders.begin(), folders.end()).size());  // distinct runs
     return folders;

@@ -257,7 +257,8 @@ json run_plan(const PlanOptions& options, std::ostream& log) {
   const scene::Scene scene = scene::parse_scene(text, file);
   const PlanSpec spec = parse_plan_section(text, file, scene.box.origin, scene.box.size);
   detail::PlanRun run{spec, scene, file, detail::forward_base(text, spec, scene, file), fs::path(options.output_dir),
-                      identify::ForwardRunner{options.executable, options.jobs}, log, options.progress, 0};
+                      identify::ForwardRunner{options.executable, options.jobs, (fs::path(options.output_dir) / "modal-cache").string()},
+                      log, options.progress, 0};
   fs::create_directories(run.dir);
 
   // the forward runs: 1. modal frequencies, 2. sweeps at the samples, 3. at their Jacobian points

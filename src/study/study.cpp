@@ -265,7 +265,8 @@ Job StudyRun::case_job(int index) {
                                      job.folder.string()};
     if (options_.modal_cache) {
       argv.push_back("--modal-cache");
-      argv.push_back(cache_path(study_case.modal_key).string());
+      argv.push_back(options_.modal_cache_directory.empty() ? cache_path(study_case.modal_key).string()
+                                                            : options_.modal_cache_directory);
     }
     // The case folder holds the study's scene.yaml and log.txt: modal and run refuse such a folder
     // without --overwrite; sweep writes into any folder (it has no such flag).
@@ -550,7 +551,7 @@ int StudyRun::run() {
     Group& group = groups_[study_case.modal_key];
     if (group.first_case < 0) {
       group.first_case = study_case.index;
-    } else if (options_.modal_cache && !study_case.primer_text.empty()) {
+    } else if (options_.modal_cache && options_.modal_cache_directory.empty() && !study_case.primer_text.empty()) {
       group.state = Group::State::needs_primer;  // two or more cases share the key
     }
   }

@@ -30,6 +30,10 @@ struct StudyOptions {
   std::string executable;
   int jobs = 0;               ///< cases at a time per rank; 0: the cores (shared among the node's ranks)
   bool modal_cache = true;    ///< pass --modal-cache to the case commands and prime each key once
+  /// With modal_cache: one cache folder for every case instead of one per modal cache key (no
+  /// primers). Its entries are keyed by content (modal/cache.hpp), so the cases of several studies
+  /// given the same folder read each other's solves (crackle plan's sweeps read its modal batch's).
+  std::string modal_cache_directory;
   bool retry_failed = false;  ///< rerun cases recorded as failed
   bool progress = true;       ///< the progress lines (cases done, running, ETA) on the log
   double case_timeout_s = 0;  ///< stop a case after this long (recorded as failed); 0: no limit
