@@ -136,6 +136,20 @@ TEST(Plan, ASensorAtTheNodeOfTheDrivenModeRanksBelowOneOnTheCracksSide) {
   ASSERT_EQ(again.exit_code, 0) << again.output;
   std::ifstream again_stream(dir / "out" / "plan.json");
   EXPECT_EQ(json::parse(again_stream)["candidates"], plan["candidates"]);
+  // Every sweep reads its modes from the modal batch's solves (one cache folder for all batches):
+  // no sweep case solved an eigenproblem of its own.
+  int sweeps = 0;
+  for (const char* stage : {"samples", "jacobian"}) {
+    for (const auto& entry : fs::directory_iterator(dir / "out" / stage / "runs" / "cases")) {
+      std::ifstream modal_stream(entry.path() / "modal.json");
+      ASSERT_TRUE(modal_stream) << entry.path();
+      const json modal = json::parse(modal_stream);
+      for (const auto& [variant, solved] : modal["variants"].items())
+        EXPECT_TRUE(solved["from_cache"].get<bool>()) << entry.path() << ": " << variant;
+      ++sweeps;
+    }
+  }
+  EXPECT_GT(sweeps, 20);
 
   // The cross-check with identify: the best-ranked candidate, the worst-ranked sensor of the same
   // drive and the worst-ranked candidate that responds, each identifying the plan's first sample from
