@@ -49,6 +49,10 @@ VariantResult& VariantResult::operator=(VariantResult&& other) noexcept {
   return *this;
 }
 
+VariantResult* ModalResult::find(mesh::Variant variant) {
+  return const_cast<VariantResult*>(static_cast<const ModalResult&>(*this).find(variant));
+}
+
 const VariantResult* ModalResult::find(mesh::Variant variant) const {
   for (const VariantResult& result : variants) {
     if (result.variant == variant) return &result;
@@ -218,12 +222,8 @@ ModalResult run_modal(const std::function<const fem::System&(mesh::Variant)>& sy
     result.variants.push_back(solve_variant(system_for(variant), options));
   }
 
-  VariantResult* uncracked = nullptr;
-  const VariantResult* open = nullptr;
-  for (VariantResult& solved : result.variants) {
-    if (solved.variant == mesh::Variant::uncracked) uncracked = &solved;
-    if (solved.variant == mesh::Variant::open) open = &solved;
-  }
+  VariantResult* uncracked = result.find(mesh::Variant::uncracked);
+  const VariantResult* open = result.find(mesh::Variant::open);
   if (uncracked && open) {
     result.mac = open_mac(*uncracked, *open, system_for(mesh::Variant::uncracked), options);
     result.pairs = pair_modes(uncracked->modes.frequencies_hz, open->modes.frequencies_hz, result.mac);

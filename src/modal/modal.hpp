@@ -165,6 +165,7 @@ struct ModalResult {
   double total_s = 0.0;
   /// The variant's result, or nullptr if it was not solved.
   const VariantResult* find(mesh::Variant variant) const;
+  VariantResult* find(mesh::Variant variant);
   /// The size of the modal problem: the most free DOFs of any variant solved (0 when none was).
   /// The frequencies' refinement estimates are Richardson extrapolations in this size.
   Index free_dofs() const;

@@ -34,8 +34,6 @@ struct Plan {
   }
 };
 
-
-
 }  // namespace
 
 struct SpectrumAnalyzer::Cache {
