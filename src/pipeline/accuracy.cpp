@@ -61,8 +61,26 @@ double signature(const RunOutcome& outcome, int probe, int q) {
   return outcome.probes[probe].value[q];
 }
 
-/// The components of one signature at a setting.
-accuracy::Estimate estimate_of(const std::string& quantity, RefinementRuns& runs, const Setting& setting, int probe, int q) {
+/// Whether the modes component at a setting takes its third band level (the band x4 run): where the
+/// two-level component of a probe signature the tolerance counts asks for it (needs_third_band).
+bool third_band_level(RefinementRuns& runs, const Setting& setting, const std::vector<std::string>& quantities,
+                      std::optional<double> tolerance) {
+  const RunOutcome& run = runs.get(setting);
+  const RunOutcome& band = runs.get(neighbours(setting, runs.box_mesh()).band);
+  for (std::size_t p = 0; p < run.probes.size(); ++p) {
+    for (int q = 0; q < 4; ++q) {
+      if (std::find(quantities.begin(), quantities.end(), ProbeSignature::kNames[q]) == quantities.end()) continue;
+      const double value = signature(run, static_cast<int>(p), q);
+      const accuracy::Component modes = modes_component(value, signature(band, static_cast<int>(p), q));
+      if (std::isfinite(modes.delta) && needs_third_band(modes.delta, tolerance)) return true;
+    }
+  }
+  return false;
+}
+
+/// The components of one signature at a setting (the modes from three band levels where `third_band`).
+accuracy::Estimate estimate_of(const std::string& quantity, RefinementRuns& runs, const Setting& setting, int probe, int q,
+                               bool third_band) {
   const RunOutcome& run = runs.get(setting);
   const double value = signature(run, probe, q);
   const Neighbours n = neighbours(setting, runs.box_mesh());
@@ -79,7 +97,9 @@ accuracy::Estimate estimate_of(const std::string& quantity, RefinementRuns& runs
                                   : mesh_component(value, false, 0.0, 0.0, runs.box_mesh()));
   }
   if (probe >= 0) {  // the modal stage does not depend on the reduced model's settings
-    components.push_back(accuracy::one_refinement("modes", value, signature(runs.get(n.band), probe, q), 2.0, 2.0));
+    components.push_back(modes_component(value, signature(runs.get(n.band), probe, q),
+                                         third_band ? signature(runs.get(n.band_twice), probe, q)
+                                                    : std::numeric_limits<double>::quiet_NaN()));
     components.push_back(accuracy::one_refinement("steps", value, signature(runs.get(n.steps), probe, q), 2.0, 2.0));
     if (runs.has_contact()) {
       components.push_back(accuracy::one_refinement("penalty", value, signature(runs.get(n.penalty), probe, q), 4.0, 1.0));
@@ -104,8 +124,10 @@ struct SettingEstimate {
   SettingSummary summary;                                          ///< of the tolerance's quantities
 };
 
-SettingEstimate estimate_setting(RefinementRuns& runs, const Setting& setting, const std::vector<std::string>& quantities) {
+SettingEstimate estimate_setting(RefinementRuns& runs, const Setting& setting, const std::vector<std::string>& quantities,
+                                 std::optional<double> tolerance) {
   SettingEstimate result;
+  const bool third_band = third_band_level(runs, setting, quantities, tolerance);
   const RunOutcome& run = runs.get(setting);
   auto counts = [&](const std::string& quantity) {
     return std::find(quantities.begin(), quantities.end(), quantity) != quantities.end();
@@ -117,7 +139,7 @@ SettingEstimate estimate_setting(RefinementRuns& runs, const Setting& setting, c
     nlohmann::json probe_json = nlohmann::json::object();
     for (int q = 0; q < 4; ++q) {
       const std::string quantity = ProbeSignature::kNames[q];
-      const accuracy::Estimate estimate = estimate_of(quantity, runs, setting, static_cast<int>(p), q);
+      const accuracy::Estimate estimate = estimate_of(quantity, runs, setting, static_cast<int>(p), q, third_band);
       probe_json[quantity] = output::estimate_json(estimate);
       take(estimate, counts(quantity));
       if (q < 3) result.lines.push_back({run.probes[p].name, estimate});
@@ -128,7 +150,7 @@ SettingEstimate estimate_setting(RefinementRuns& runs, const Setting& setting, c
     result.mode = {{"mode", run.mode->mode}};
     static const char* names[3] = {"f_uncracked", "f_open", "f_bilinear"};
     for (int q = 0; q < 3; ++q) {
-      const accuracy::Estimate estimate = estimate_of(names[q], runs, setting, -1, q);
+      const accuracy::Estimate estimate = estimate_of(names[q], runs, setting, -1, q, false);
       result.mode[names[q]] = output::estimate_json(estimate);
       if (q == 2) {
         take(estimate, counts("f_b"));
@@ -207,14 +229,14 @@ void run_with_accuracy(const scene::Scene& scene, const RunRoute& route, const s
   if (first.probes.empty()) throw SolverError(scene.file + ": accuracy: the run has no probe signatures to estimate");
   setting = start;  // the scene's own run first all the same: the refinements' base band and penalty are its
   const std::vector<std::string>& quantities = scene.accuracy.quantities;
-  SettingEstimate estimate = estimate_setting(runs, setting, quantities);
+  SettingEstimate estimate = estimate_setting(runs, setting, quantities, plan.tolerance);
   const ToleranceOutcome outcome = reach_tolerance(
       plan.tolerance, setting, estimate.summary,
       [&](const Setting& from, std::string& blocking) {
         return refine(runs, from, estimate.summary, scene.accuracy.budget_s - total.seconds(), plan.tolerance, blocking);
       },
       [&](const Setting& at) {
-        estimate = estimate_setting(runs, at, quantities);
+        estimate = estimate_setting(runs, at, quantities, plan.tolerance);
         return estimate.summary;
       },
       [&](const Setting& at) { return runs.describe(at); }, out);
@@ -226,7 +248,8 @@ void run_with_accuracy(const scene::Scene& scene, const RunRoute& route, const s
                                              estimate.summary, outcome, runs.runs_json(), run_s, runs.refinement_s(), wall);
   accuracy["method"] = "one refinement per component from the setting run (DETECTION.md sec. 1): mesh: the two lower "
                        "element orders (Richardson with the observed rate per order, GCI safety factor 1.25, 3 where "
-                       "not asymptotic); modes: twice the band; steps: twice per period; penalty: four times; window: "
+                       "not asymptotic); modes: twice the band, read at order 2, and four times where that change is above a tenth "
+                       "of the tolerance (of 0.01 without one): three levels with the observed order (Fs 1.25 for an order in [1.33, 4], else 3); steps: twice per period; penalty: four times; window: "
                        "the start transient left in the last window, from the last three windows (Richardson over windows, "
                        "the decay ratio never faster than the damping's slowest, decay_ratio_bound). delta: signed relative "
                        "error of the value, " + std::string(output::kEstimateFields);

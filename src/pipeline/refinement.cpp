@@ -42,6 +42,8 @@ Neighbours neighbours(const Setting& setting, bool box_mesh) {
   n.band = n.steps = n.penalty = n.harmonics = n.window = setting;
   n.window.window += 1;
   n.band.band += 1;
+  n.band_twice = n.band;
+  n.band_twice.band += 1;
   n.steps.steps += 1;
   n.penalty.penalty += 1;
   n.harmonics.harmonics += 1;
@@ -103,6 +105,20 @@ accuracy::Component missing_component(const std::string& name, double value) {
   component.reason = name + ": the refinement lacks this quantity (a peak or event that moved out of the range "
                             "or changed its kind)";
   return component;
+}
+
+bool needs_third_band(double two_level_delta, std::optional<double> tolerance) {
+  return std::abs(two_level_delta) > kThirdBandShare * tolerance.value_or(0.01);
+}
+
+accuracy::Component modes_component(double value, double band, double band_twice) {
+  if (!std::isfinite(band)) return missing_component("modes", value);
+  if (!std::isfinite(band_twice)) return accuracy::one_refinement("modes", value, band, 2.0, kModesOrder);
+  accuracy::Component modes =
+      accuracy::three_level_at("modes", value, band, band_twice, 1, 2.0, kModesOrderMin, kModesOrderMax);
+  modes.refined = band_twice;
+  if (!modes.reason.empty()) modes.reason = "modes (band, x2, x4): " + modes.reason;
+  return modes;
 }
 
 accuracy::Component mesh_component(double value, bool levels, double q1, double q2, bool box_mesh) {

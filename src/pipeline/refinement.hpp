@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <functional>
 #include <iosfwd>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -47,10 +48,11 @@ struct Setting {
 Setting finer_mesh(const Setting& setting);
 
 /// The settings the components of an estimate at a setting need: the two lower orders (the mesh,
-/// on a box at order 3 or more) and one refinement of each other component.
+/// on a box at order 3 or more) and one refinement of each other component; `band_twice` (the band
+/// x4) is run only where the modes component needs its third level (needs_third_band).
 struct Neighbours {
   std::optional<Setting> coarse, coarser;
-  Setting band, steps, penalty, harmonics, window;
+  Setting band, steps, penalty, harmonics, window, band_twice;
 };
 Neighbours neighbours(const Setting& setting, bool box_mesh);
 
@@ -81,6 +83,32 @@ accuracy::Component frequency_levels_component(const Neighbours& n, const Settin
 
 /// A component whose refinement lacks the quantity (NaN there): not verified, with the reason.
 accuracy::Component missing_component(const std::string& name, double value);
+
+/// The order the band refinement assumes with two levels: the static correction leaves the truncated
+/// modes' error at their static share times (omega/omega_m+1)^2 (HYBRID.md sec. 2). It holds on the
+/// beam (effectivity 1.04) and not where the contact's impacts reach far above the band: the plate's
+/// A3/A1 converges at an order 1.1 then 0.7 per doubling (effectivity 0.51; docs/benchmarks.md 11.5c),
+/// hence the third level.
+inline constexpr double kModesOrder = 2.0;
+/// The range of the order the three band levels observe (per doubling of the band) in which the
+/// levels count as asymptotic (Fs = 1.25): a factor 1.5 below and 2 above kModesOrder. Outside it
+/// the levels are not asymptotic (Fs = 3; Roache: an observed order away from the formal one), and
+/// below half its least or above twice its most not verified (accuracy::three_level).
+inline constexpr double kModesOrderMin = kModesOrder / 1.5, kModesOrderMax = 2.0 * kModesOrder;
+/// A two-level modes component above this share of the tolerance (of 0.01 without one) is checked by
+/// a third band level: an order wrong by the plate's factor of 4 would otherwise hide an error of the
+/// tolerance's size.
+inline constexpr double kThirdBandShare = 0.1;
+
+/// Whether a quantity's two-level modes component (|delta|) asks for the third band level.
+bool needs_third_band(double two_level_delta, std::optional<double> tolerance);
+
+/// The modes component of `value` from the band x2 run's value `band`: read at kModesOrder, or, where
+/// `band_twice` (the band x4 run's value) is finite, three levels with the observed order in
+/// [kModesOrderMin, kModesOrderMax] (not verified where the changes do not fall: a truncation the
+/// band cannot settle). A NaN `band`: missing_component.
+accuracy::Component modes_component(double value, double band,
+                                    double band_twice = std::numeric_limits<double>::quiet_NaN());
 
 /// Whether and how a command's results are estimated.
 struct EstimatePlan {
