@@ -152,9 +152,12 @@ Param build_parameters() {
           .defaults_to("0").to(&MaterialEntrySection::angle),
       map_of("region", "Where the material is: coordinate ranges (box meshes get grid lines at their ends) "
                        "and/or a physical volume group of a Gmsh mesh; none: everywhere.", {
-        number("x", "Range of the element centroids along x.").with_unit("m").list(2),
-        number("y", "Range of the element centroids along y.").with_unit("m").list(2),
-        number("z", "Range of the element centroids along z (a ply).").with_unit("m").list(2),
+        number("x", "Range of the element centroids along x.").with_unit("m").list(2).increasing()
+            .to(&RegionSection::range, kX),
+        number("y", "Range of the element centroids along y.").with_unit("m").list(2).increasing()
+            .to(&RegionSection::range, kY),
+        number("z", "Range of the element centroids along z (a ply).").with_unit("m").list(2).increasing()
+            .to(&RegionSection::range, kZ),
         text("group", "Physical volume group of a Gmsh mesh.").to(&RegionSection::group),
       }).optional_section(),
     }),
@@ -341,9 +344,9 @@ Param build_parameters() {
             .to(&InitialSection::velocity),
         number("displacement", "Initial displacement.").with_unit("m").list(3).defaults_to("[0, 0, 0]")
             .to(&InitialSection::displacement),
-        number("x", "Range along x.").with_unit("m").list(2),
-        number("y", "Range along y.").with_unit("m").list(2),
-        number("z", "Range along z.").with_unit("m").list(2),
+        number("x", "Range along x.").with_unit("m").list(2).increasing().to(&InitialSection::range, kX),
+        number("y", "Range along y.").with_unit("m").list(2).increasing().to(&InitialSection::range, kY),
+        number("z", "Range along z.").with_unit("m").list(2).increasing().to(&InitialSection::range, kZ),
       }).defaults_to("[]"),
       map_of("snapshots", "Displacement fields written as VTU files. With transient.model: reduced the field is "
                           "u = Phi q + the static correction G_res (B^T p + f a) (HYBRID.md sec. 2), recovered only "
@@ -356,7 +359,7 @@ Param build_parameters() {
                         "every step regardless.", {
         integer("samples_per_period", "Rows of probes.csv per excitation period (per pulse duration for a "
                                       "pulse; without an excitation every step is written); all: every step.")
-            .at_least(2).or_word("all").defaults_to("64"),
+            .at_least(2).or_word("all", 0).defaults_to("64").to(&TransientSection::history_samples_per_period),
       }),
       boolean("progress", "Progress line with ETA on the terminal.").defaults_to("true").to(&TransientSection::progress),
     }).exactly_one_of({"periods", "duration"}).optional_section(),
@@ -595,16 +598,6 @@ std::vector<MaterialEntrySection> materials_from(const Values& values, bool gmsh
       read_bound(*declared_entry.child("orthotropic"), values, entry + ".orthotropic", orthotropic);
       material.orthotropic = orthotropic;
     }
-    for (int axis = 0; axis < 3; ++axis) {
-      const std::string key = entry + ".region." + kAxes[axis];
-      if (!values.has(key)) continue;
-      const auto& range = values.numbers(key);
-      if (!(range[0] < range[1])) {
-        values.fail(key, "[low, high] with low < high",
-                    list_text({range[0], range[1]}));
-      }
-      material.region.range[axis] = std::array<double, 2>{range[0], range[1]};
-    }
     if (values.has(entry + ".region")) {
       read_bound(*declared_entry.child("region"), values, entry + ".region", material.region);
     }
@@ -746,18 +739,8 @@ ReleaseSection release_from(const Values& values, const Scene& scene) {
 std::vector<InitialSection> initial_from(const Values& values) {
   std::vector<InitialSection> fields;
   for (int i = 0; i < values.count("transient.initial"); ++i) {
-    const std::string entry = "transient.initial[" + std::to_string(i) + "]";
     InitialSection initial;
-    read_entry(values, "transient.initial", i, initial);
-    for (int axis = 0; axis < 3; ++axis) {
-      const std::string key = entry + "." + kAxes[axis];
-      if (!values.has(key)) continue;
-      const auto& range = values.numbers(key);
-      if (!(range[0] < range[1])) {
-        values.fail(key, "[low, high] with low < high", list_text({range[0], range[1]}));
-      }
-      initial.range[axis] = std::array<double, 2>{range[0], range[1]};
-    }
+    read_entry(values, "transient.initial", i, initial);  // the ranges: increasing, bound per axis
     fields.push_back(initial);
   }
   return fields;
@@ -779,9 +762,6 @@ TransientSection transient_from(const Values& values, const Scene& scene) {
     values.fail("transient.time_step", "auto with transient.model: reduced (its step is set by "
                 "transient.reduced.steps_per_period)", format_number(*transient.time_step));
   }
-  transient.history_samples_per_period = values.is_word("transient.history.samples_per_period")
-                                             ? 0
-                                             : values.integer("transient.history.samples_per_period");
   if (transient.variant == mesh::Variant::open && !scene.has_crack()) transient.variant = mesh::Variant::uncracked;
   return transient;
 }

@@ -53,6 +53,10 @@ Param& Param::distinct() {
   is_distinct = true;
   return *this;
 }
+Param& Param::increasing() {
+  is_increasing = true;
+  return *this;
+}
 Param& Param::same_length_as(std::string sibling) {
   length_of = std::move(sibling);
   return *this;
@@ -76,6 +80,10 @@ Param& Param::or_word(std::string word) {
   word_alternative = std::move(word);
   return *this;
 }
+Param& Param::or_word(std::string word, double stands_for) {
+  word_value = stands_for;
+  return or_word(std::move(word));
+}
 
 Param& Param::or_scalar_for(std::string child) {
   scalar_child = std::move(child);
@@ -94,8 +102,12 @@ void assign_bound(const Param& param, const Values& values, const std::string& p
     if (c.kind == Kind::map) {
       assign_bound(c, values, key, section_type, section);
     } else if (c.binding.assign && c.binding.section == section_type && values.has(key)) {
-      const bool auto_word = (c.kind == Kind::number || c.kind == Kind::integer) && values.is_word(key);
-      if (!auto_word) c.binding.assign(values, key, section);  // the word (auto): the struct's default
+      const bool word = (c.kind == Kind::number || c.kind == Kind::integer) && values.is_word(key);
+      if (!word) {
+        c.binding.assign(values, key, section);
+      } else if (c.word_value && c.binding.assign_word) {
+        c.binding.assign_word(*c.word_value, section);  // the value the word stands for
+      }  // else the word (auto): the struct's default
     }
   }
 }
@@ -409,7 +421,21 @@ class Validator {
       value.words.insert(value.words.end(), single.words.begin(), single.words.end());
       values_.set(item_path, single);
     }
+    if (param.is_increasing) check_increasing(param, value.numbers, path, line);
     values_.set(path, value);
+  }
+
+  /// Param::increasing: `[low, high] with low < high` (or the list in increasing order), the list as given.
+  void check_increasing(const Param& param, const std::vector<double>& numbers, const std::string& path, int line) {
+    for (std::size_t i = 1; i < numbers.size(); ++i) {
+      if (numbers[i] > numbers[i - 1]) continue;
+      std::string got = "[";
+      for (std::size_t k = 0; k < numbers.size(); ++k) got += (k ? ", " : "") + format_number(numbers[k]);
+      fail(path, line,
+           param.min_length == 2 && param.max_length == 2 ? "[low, high] with low < high"
+                                                          : "a list in increasing order",
+           got + "]");
+    }
   }
 
   std::size_t sibling_length(const std::string& path, const std::string& sibling) const {
@@ -646,7 +672,7 @@ std::string markdown_table(const Param& root) {
           if (!p.word_alternative.empty()) range += (range.empty() ? "" : "; ") + std::string("or `") + p.word_alternative + "`";
           if (p.is_list_of_scalars()) {
             type = "list of " + (p.length_of.empty() ? count_text(p) + " " : "") +
-                   (p.is_distinct ? "distinct " : "") + type + "s" +
+                   (p.is_distinct ? "distinct " : "") + (p.is_increasing ? "increasing " : "") + type + "s" +
                    (p.length_of.empty() ? "" : ", one per entry of " + p.length_of);
           }
         }

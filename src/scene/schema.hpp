@@ -49,6 +49,8 @@ T bound_value(const Values& values, const std::string& path, const std::function
 struct Binding {
   std::type_index section = typeid(void);  ///< the struct the field belongs to
   std::function<void(const Values& values, const std::string& path, void* section)> assign;
+  /// A number's field set to the value its or_word() word stands for (an arithmetic field only).
+  std::function<void(double value, void* section)> assign_word;
 };
 
 /// One declared parameter. Built by the functions below and refined by chained modifiers:
@@ -67,11 +69,13 @@ struct Param {
   std::vector<std::string> choices;
   int min_length = 0, max_length = 0;  ///< a list of scalars when max_length > 0
   bool is_distinct = false;            ///< list of scalars: no entry twice
+  bool is_increasing = false;          ///< list of numbers: each entry above the one before
   std::string length_of;               ///< list of scalars: as many entries as this sibling list
   std::string default_text;            ///< YAML text of the default; a description with a rule
   DefaultRule default_rule;            ///< computes the default when set
   std::vector<Param> children;         ///< keys of a map, keys of each entry of a list
   std::string word_alternative;        ///< number: a word also accepted instead, e.g. "auto"
+  std::optional<double> word_value;    ///< the value that word stands for in the bound field (none: the default)
   std::string scalar_child;            ///< map: a scalar given for the map stands for this child
   /// map, list of maps: groups of keys of which each map must give exactly one
   std::vector<std::vector<std::string>> exclusive_keys;
@@ -88,6 +92,8 @@ struct Param {
   Param& list(int length);        ///< a list of exactly `length` scalars
   Param& list(int min_entries, int max_entries);
   Param& distinct();
+  /// A list of numbers whose entries increase strictly: a range `[low, high]` with low < high.
+  Param& increasing();
   Param& same_length_as(std::string sibling);
   Param& defaults_to(std::string yaml);
   Param& defaults_to(std::string description, DefaultRule rule);
@@ -95,6 +101,8 @@ struct Param {
   Param& optional_section();
   /// A number that may also be given as this word (read with Values::is_word).
   Param& or_word(std::string word);
+  /// The same, the word standing for `stands_for` in the bound field (`samples_per_period: all` for 0).
+  Param& or_word(std::string word, double stands_for);
   /// A map that may also be given as a plain value, meaning `{child: value}`
   /// (`frequency: 850` for `frequency: {hz: 850}`).
   Param& or_scalar_for(std::string child);
@@ -103,13 +111,18 @@ struct Param {
   Param& exactly_one_of(std::vector<std::string> keys);
   /// Binds a scalar (or a list of scalars) to `field` of the section struct S: read_bound(values,
   /// path, section) assigns it where the document has the value (a number given as its or_word()
-  /// word is left at the struct's default: auto). A choice declared with Words goes to its enum.
+  /// word is left at the struct's default, auto, or set to the value the word stands for). A choice declared with Words goes to its enum.
   template <class S, class T>
   Param& to(T S::*field) {
     binding.section = typeid(S);
     binding.assign = [field, convert = choice_value](const Values& values, const std::string& path, void* section) {
       static_cast<S*>(section)->*field = bound_value<T>(values, path, convert);
     };
+    if constexpr (std::is_arithmetic_v<T>) {
+      binding.assign_word = [field](double value, void* section) {
+        static_cast<S*>(section)->*field = static_cast<T>(value);
+      };
+    }
     return *this;
   }
 

@@ -112,6 +112,42 @@ TEST(SceneEdges, FoldersAreNotFiles) {
             "edge.yaml:1: mesh.gmsh: expected a Gmsh mesh file, got a directory, '" + folder + "'");
 }
 
+// Keys read through the table's bindings alone: a coordinate range (an initial field's, a material's
+// region) must increase, `history.samples_per_period: all` stands for every step (0), and the
+// values land in their fields.
+TEST(SceneEdges, RangesIncreaseAndAWordStandsForItsValue) {
+  const std::string body = "mesh:\n  box: {size: [0.2, 0.02, 0.01], cells: [8, 1, 1], order: 1}\n"
+                           "material: {E: 210.0e9, nu: 0.3, rho: 7850.0}\n";
+  const std::string transient = "transient:\n  periods: 2\n  excitation: {face: x+, amplitude: 1.0, frequency: 100.0}\n";
+  const Scene scene = parse_scene(body + transient + "  initial:\n    - {velocity: [0, 0, 1], x: [0.05, 0.1], z: [0, 0.01]}\n"
+                                  "  history: {samples_per_period: all}\n", "edge.yaml");
+  ASSERT_EQ(scene.transient->initial.size(), 1u);
+  const InitialSection& field = scene.transient->initial[0];
+  ASSERT_TRUE(field.range[0] && field.range[2]);
+  EXPECT_FALSE(field.range[1]);
+  EXPECT_EQ((*field.range[0])[0], 0.05);
+  EXPECT_EQ((*field.range[0])[1], 0.1);
+  EXPECT_EQ((*field.range[2])[1], 0.01);
+  EXPECT_EQ(scene.transient->history_samples_per_period, 0);
+  EXPECT_EQ(parse_scene(body + transient, "edge.yaml").transient->history_samples_per_period, 64);
+  EXPECT_EQ(parse_scene(body + transient + "  history: {samples_per_period: 16}\n", "edge.yaml")
+                .transient->history_samples_per_period, 16);
+  EXPECT_EQ(error_of(body + transient + "  initial:\n    - {velocity: [0, 0, 1], y: [0.02, 0.01]}\n"),
+            "edge.yaml:8: transient.initial[0].y: expected [low, high] with low < high, got [0.02, 0.01]");
+  EXPECT_EQ(error_of(body + transient + "  initial:\n    - {x: [0.1, 0.1]}\n"),
+            "edge.yaml:8: transient.initial[0].x: expected [low, high] with low < high, got [0.1, 0.1]");
+  const std::string plies = "mesh:\n  box: {size: [0.2, 0.02, 0.01], cells: [8, 1, 2], order: 1}\nmaterials:\n"
+                            "  - {name: a, isotropic: {E: 210.0e9, nu: 0.3}, rho: 7850.0, region: {z: [0.0, 0.005]}}\n"
+                            "  - {name: b, isotropic: {E: 70.0e9, nu: 0.3}, rho: 2700.0, region: {z: ";
+  const Scene layered = parse_scene(plies + "[0.005, 0.01]}}\n", "edge.yaml");
+  ASSERT_EQ(layered.materials.size(), 2u);
+  ASSERT_TRUE(layered.materials[1].region.range[2]);
+  EXPECT_EQ((*layered.materials[1].region.range[2])[0], 0.005);
+  EXPECT_FALSE(layered.materials[1].region.range[0]);
+  EXPECT_EQ(error_of(plies + "[0.01, 0.005]}}\n"),
+            "edge.yaml:5: materials[1].region.z: expected [low, high] with low < high, got [0.01, 0.005]");
+}
+
 TEST(SceneEdges, NestedAliasesAreBounded) {
   std::string text = "mesh:\n  box: {size: [0.2, 0.02, 0.01], cells: [8, 1, 1], order: 1}\n"
                      "material: {E: 210.0e9, nu: 0.3, rho: 7850.0}\n"
