@@ -10,6 +10,7 @@
 
 #include "core/errors.hpp"
 #include "core/resources.hpp"
+#include "linalg/threads.hpp"
 
 namespace crackle::modal {
 namespace {
@@ -46,18 +47,21 @@ struct Basis {
   MatrixX mass_vectors;
   MatrixX stiffness_vectors;
 
-  // Tall-skinny dense products go through lazyProduct (coefficient-wise, single-threaded): they
-  // are tiny, and Eigen's OpenMP GEMM would add barriers that stall on a busy machine.
+  // The tall-skinny dense products (n x k times k x k, k x n times n x k) go through Eigen's
+  // cache-blocked GEMM on one thread (linalg::SingleThreadedEigen where they are called): Eigen's
+  // OpenMP GEMM would add barriers that stall on a busy machine, and the coefficient-wise
+  // lazyProduct they used before ran at a fifth of the blocked speed once k reached a few hundred
+  // modes (a reduced model's band x4: docs/benchmarks.md 11.5d).
 
   /// Right-multiplies all three by `transform` (n_vectors x n_vectors).
   void transform(const MatrixX& transform) {
-    vectors = vectors.lazyProduct(transform).eval();
-    mass_vectors = mass_vectors.lazyProduct(transform).eval();
-    stiffness_vectors = stiffness_vectors.lazyProduct(transform).eval();
+    vectors = (vectors * transform).eval();
+    mass_vectors = (mass_vectors * transform).eval();
+    stiffness_vectors = (stiffness_vectors * transform).eval();
   }
   /// max |V^T M V - I|.
   double orthogonality_error() const {
-    const MatrixX gram = vectors.transpose().lazyProduct(mass_vectors);
+    const MatrixX gram = vectors.transpose() * mass_vectors;
     return (gram - MatrixX::Identity(vectors.cols(), vectors.cols())).cwiseAbs().maxCoeff();
   }
 };
@@ -87,8 +91,8 @@ void normalise(Basis& basis) {
 /// and turns the eigenvalues into Rayleigh quotients; for a degenerate cluster (rigid-body modes)
 /// it picks an M-orthonormal basis of the computed subspace.
 VectorX rayleigh_ritz(Basis& basis) {
-  MatrixX projected_k = basis.vectors.transpose().lazyProduct(basis.stiffness_vectors);
-  MatrixX projected_m = basis.vectors.transpose().lazyProduct(basis.mass_vectors);
+  MatrixX projected_k = basis.vectors.transpose() * basis.stiffness_vectors;
+  MatrixX projected_m = basis.vectors.transpose() * basis.mass_vectors;
   projected_k = 0.5 * (projected_k + projected_k.transpose()).eval();
   projected_m = 0.5 * (projected_m + projected_m.transpose()).eval();
   const Eigen::GeneralizedSelfAdjointEigenSolver<MatrixX> solver(projected_k, projected_m);
@@ -178,6 +182,7 @@ ModeSet solve_modes(const SparseMatrix& stiffness, const SparseMatrix& mass,
   // only negative eigenvalues are round-off around 0).
   const int n_kept = n_rigid + options.modes;
   Stopwatch postprocess_watch;
+  const linalg::SingleThreadedEigen one_thread;  // the Basis products (see there)
   Basis basis;
   basis.vectors = pairs.vectors.leftCols(n_kept);
   basis.mass_vectors = multiply(mass, basis.vectors);
