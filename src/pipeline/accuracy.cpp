@@ -248,8 +248,9 @@ void run_with_accuracy(const scene::Scene& scene, const RunRoute& route, const s
                                              estimate.summary, outcome, runs.runs_json(), run_s, runs.refinement_s(), wall);
   accuracy["method"] = "one refinement per component from the setting run (DETECTION.md sec. 1): mesh: the two lower "
                        "element orders (Richardson with the observed rate per order, GCI safety factor 1.25, 3 where "
-                       "not asymptotic); modes: twice the band, read at order 2, and four times where that change is above a tenth "
-                       "of the tolerance (of 0.01 without one): three levels with the observed order (Fs 1.25 for an order in [1.33, 4], else 3); steps: twice per period; penalty: four times; window: "
+                       "not asymptotic); modes: twice the band, read at order 2, and four times where that change "
+                       "is above a tenth of the tolerance (of 0.01 without one): three levels with the observed order "
+                       "(Fs 1.25 for an order in [1.33, 4], else 3); steps: twice per period; penalty: four times; window: "
                        "the start transient left in the last window, from the last three windows (Richardson over windows, "
                        "the decay ratio never faster than the damping's slowest, decay_ratio_bound). delta: signed relative "
                        "error of the value, " + std::string(output::kEstimateFields);

@@ -149,7 +149,8 @@ SettingEstimate estimate_setting(RefinementSweeps& sweeps, const Setting& settin
   bool third_band = false;
   const Setting band = neighbours(setting, sweeps.box_mesh()).band;
   for (const Quantity& quantity : quantities) {
-    if (quantity.modal || std::find(counted.begin(), counted.end(), quantity.tolerance_quantity) == counted.end()) continue;
+    const bool is_counted = std::find(counted.begin(), counted.end(), quantity.tolerance_quantity) != counted.end();
+    if (quantity.modal || !is_counted) continue;
     const accuracy::Component modes =
         modes_component(value_of(sweeps.get(setting).document, quantity.pointer),
                         value_of(sweeps.near(band).document, quantity.pointer));
@@ -238,7 +239,8 @@ void sweep_with_accuracy(const scene::Scene& scene, const RunRoute& route, const
       "one refinement per component from the setting swept (DETECTION.md sec. 1): mesh: the two lower element orders "
       "(Richardson with the observed rate per order, GCI safety factor 1.25, 3 where not asymptotic; the bilinear "
       "frequency Richardson in DOFs^-1/3, 3); modes: twice the band, read at order 2, and four times where that change "
-      "is above a tenth of the tolerance (of 0.01 without one): three levels with the observed order (Fs 1.25 for an order in [1.33, 4], else 3); harmonics: H + 2 (the change, three times: the "
+      "is above a tenth of the tolerance (of 0.01 without one): three levels with the observed order (Fs 1.25 for an "
+      "order in [1.33, 4], else 3); harmonics: H + 2 (the change, three times: the "
       "convergence in H is not monotone); penalty: four times it (where the crack has contact); the refinement "
       "sweeps re-solve windows of the range around the peaks at the main sweep's step (runs[].windows, fractions "
       "of the range; where the branch has no fold or period doubling and every peak stays inside its window), else "

@@ -111,7 +111,8 @@ struct Param {
   Param& exactly_one_of(std::vector<std::string> keys);
   /// Binds a scalar (or a list of scalars) to `field` of the section struct S: read_bound(values,
   /// path, section) assigns it where the document has the value (a number given as its or_word()
-  /// word is left at the struct's default, auto, or set to the value the word stands for). A choice declared with Words goes to its enum.
+  /// word is left at the struct's default, auto, or set to the value the word stands for). A choice
+  /// declared with Words goes to its enum.
   template <class S, class T>
   Param& to(T S::*field) {
     binding.section = typeid(S);
