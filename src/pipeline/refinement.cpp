@@ -114,6 +114,15 @@ bool needs_third_band(double two_level_delta, std::optional<double> tolerance) {
 accuracy::Component modes_component(double value, double band, double band_twice) {
   if (!std::isfinite(band)) return missing_component("modes", value);
   if (!std::isfinite(band_twice)) return accuracy::one_refinement("modes", value, band, 2.0, kModesOrder);
+  const double first = band - value, last = band_twice - band;
+  if (first * last < 0.0 && std::abs(first) >= kSettledRatio * std::abs(last)) {
+    accuracy::Component settled = accuracy::one_refinement("modes", value, band_twice, 4.0, 0.0);  // Fs 3
+    settled.ratio = first / last;
+    settled.asymptotic = false;
+    settled.reason = "modes (band, x2, x4): settled with a wiggle (the last change " + format_number(last / first) +
+                     " of the first): three times the change to the band x4";
+    return settled;
+  }
   accuracy::Component modes =
       accuracy::three_level_at("modes", value, band, band_twice, 1, 2.0, kModesOrderMin, kModesOrderMax);
   modes.refined = band_twice;
